@@ -1,13 +1,39 @@
-#include <CLI/CLI.hpp>
+// mmlio: multi-modal multi-LiDAR-inertial odometry and mapping, command-line front end.
+#include <exception>
 #include <iostream>
-#include <rosbag/bag.h>
-#include <sensor_msgs/Imu.h>
+
+#include "commands.hpp"
+#include "mmlio/core/error.hpp"
+#include "mmlio/core/log.hpp"
+
 int main(int argc, char** argv) {
-  CLI::App app{"mmlio"};
-  CLI11_PARSE(app, argc, argv);
-  rosbag::Bag bag("/tmp/smoke.bag", rosbag::bagmode::Write);
-  sensor_msgs::Imu imu; imu.header.stamp = ros::Time(1.0);
-  bag.write("/imu", imu.header.stamp, imu);
-  bag.close();
-  std::cout << "ok\n";
+  CLI::App app{"mmlio: multi-LiDAR-inertial odometry and mapping for ROS1 bags"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "mmlio 0.1.0");
+  bool verbose = false, quiet = false;
+  app.add_flag("-v,--verbose", verbose, "Print debug messages");
+  app.add_flag("-q,--quiet", quiet, "Print warnings and errors only");
+  app.parse_complete_callback([&] {
+    mmlio::log::configure(verbose ? mmlio::log::Level::kDebug
+                                  : (quiet ? mmlio::log::Level::kWarn : mmlio::log::Level::kInfo));
+  });
+
+  mmlio::apps::registerInfoCommand(app);
+  mmlio::apps::registerSimulateCommand(app);
+  mmlio::apps::registerEvaluateCommand(app);
+  mmlio::apps::registerRunCommand(app);
+  mmlio::apps::registerBenchCommand(app);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const mmlio::Error& e) {
+    std::cerr << "mmlio: " << e.what() << '\n';
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "mmlio: internal error: " << e.what() << '\n';
+    return 2;
+  }
+  return 0;
 }

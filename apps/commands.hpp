@@ -1,0 +1,12 @@
+#pragma once
+// Each subcommand lives in its own apps/cmd_<name>.cpp and registers itself on the app.
+// Handlers throw mmlio::Error for user-facing problems; main() prints them as one line.
+#include <CLI/CLI.hpp>
+
+namespace mmlio::apps {
+void registerInfoCommand(CLI::App& app);
+void registerSimulateCommand(CLI::App& app);
+void registerEvaluateCommand(CLI::App& app);
+void registerRunCommand(CLI::App& app);
+void registerBenchCommand(CLI::App& app);
+}  // namespace mmlio::apps
