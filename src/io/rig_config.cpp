@@ -1,0 +1,335 @@
+#include "mmlio/io/rig_config.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "mmlio/core/error.hpp"
+#include "mmlio/io/yaml_binder.hpp"
+
+namespace mmlio::io {
+
+// ---- the schema: one line per field --------------------------------------------------------
+
+namespace {
+
+void bind(YamlBinder& b, LidarConfig& c) {
+  b.field("name", c.name, "unique LiDAR name; calibration files and the run report use it (required)");
+  b.field("type", c.type,
+          "velodyne | ouster | hesai | generic_spinning (sensor_msgs/PointCloud2 with rings),\n"
+          "livox (livox_ros_driver/CustomMsg, solid state) (required)");
+  b.field("topic", c.topic, "ROS topic of this LiDAR's point clouds (required)");
+  b.field("T_imu_sensor", c.T_imu_sensor,
+          "extrinsic: 4x4 row-major, maps points from this LiDAR's frame into the IMU frame, m");
+  b.field("time_offset_s", c.time_offset_s, "clock offset, s: t_imu = t_stamp + time_offset_s");
+  b.field("min_range_m", c.min_range_m, "drop returns closer than this (rig, vehicle), m");
+  b.field("max_range_m", c.max_range_m, "drop returns farther than this, m");
+  b.field("num_rings", c.num_rings, "laser rings (VLP-16: 16) or, for livox, scan lines (Horizon: 6)");
+  b.field("enabled", c.enabled, "false: ignore this LiDAR in every mode");
+}
+
+void bind(YamlBinder& b, ImuConfig& c) {
+  b.field("topic", c.topic, "ROS topic of sensor_msgs/Imu");
+  b.field("acc_unit", c.acc_unit, "accelerometer unit: auto (detect from the standstill norm) | g | m/s2");
+  b.field("acc_noise_density", c.acc_noise_density, "accelerometer white noise, m/s^2/sqrt(Hz)");
+  b.field("gyro_noise_density", c.gyro_noise_density, "gyroscope white noise, rad/s/sqrt(Hz)");
+  b.field("acc_bias_random_walk", c.acc_bias_random_walk, "accelerometer bias random walk, m/s^3/sqrt(Hz)");
+  b.field("gyro_bias_random_walk", c.gyro_bias_random_walk, "gyroscope bias random walk, rad/s^2/sqrt(Hz)");
+  b.field("gravity_m_s2", c.gravity_m_s2, "local gravity magnitude, m/s^2");
+  b.field("init_duration_s", c.init_duration_s,
+          "standstill at the start used to estimate gravity direction and gyro bias, s");
+}
+
+void bind(YamlBinder& b, FeatureConfig& c) {
+  b.field("neighbours", c.neighbours, "points on each side used for curvature / scatter");
+  b.field("edge_threshold", c.edge_threshold, "curvature above which a point is an edge candidate");
+  b.field("plane_threshold", c.plane_threshold, "curvature below which a point is a plane candidate");
+  b.field("continuity_jump_m", c.continuity_jump_m,
+          "depth difference between neighbours that breaks continuity (occlusion edge), m");
+}
+
+void bind(YamlBinder& b, BadFrameConfig& c) {
+  b.field("enabled", c.enabled, "drop solid-state frames with too little structure (paper: tau_e check)");
+  b.field("min_edge_range_m", c.min_edge_range_m, "only edge points farther than this count, m");
+  b.field("min_edge_points", c.min_edge_points, "tau_e: a frame with fewer counted edge points is bad");
+}
+
+void bind(YamlBinder& b, OdometryConfig& c) {
+  b.field("edge_voxel_m", c.edge_voxel_m, "voxel size for downsampling edge features, m");
+  b.field("plane_voxel_m", c.plane_voxel_m, "voxel size for downsampling plane features, m");
+  b.field("map_voxel_m", c.map_voxel_m, "local map resolution, m");
+  b.field("local_map_radius_m", c.local_map_radius_m, "local map kept around the current pose, m");
+  b.field("window_size", c.window_size, "keyframes in the sliding window");
+  b.field("keyframe_rotation_deg", c.keyframe_rotation_deg, "new keyframe after this rotation, deg");
+  b.field("keyframe_translation_m", c.keyframe_translation_m, "new keyframe after this translation, m");
+  b.field("keyframe_interval_s", c.keyframe_interval_s, "new keyframe after this time, s");
+  b.field("max_iterations", c.max_iterations, "solver iterations per window optimisation");
+  b.field("huber_loss_m", c.huber_loss_m, "Huber loss scale of point-to-edge / point-to-plane residuals, m");
+}
+
+void bind(YamlBinder& b, LoopConfig& c) {
+  b.field("enabled", c.enabled, "detect and close loops in the back end");
+  b.field("search_radius_m", c.search_radius_m, "loop candidates: past keyframes within this distance, m");
+  b.field("min_time_gap_s", c.min_time_gap_s, "loop candidates: at least this much older than the query, s");
+  b.field("max_fitness_m", c.max_fitness_m, "accept a loop when the mean ICP residual is below this, m");
+  b.field("min_overlap", c.min_overlap, "accept a loop when the inlier fraction is above this, 0..1");
+}
+
+void bind(YamlBinder& b, OutputConfig& c) {
+  b.field("map_voxel_m", c.map_voxel_m, "voxel size of the written map.pcd, m; 0 keeps every point");
+  b.field("per_lidar_maps", c.per_lidar_maps, "also write one map_<lidar>.pcd per LiDAR");
+  b.field("write_kitti", c.write_kitti, "also write the trajectory in KITTI format (poses + times.txt)");
+}
+
+void bind(YamlBinder& b, RigConfig& c) {
+  b.field("mode", c.mode, "which LiDARs to fuse: hvi (all) | vi (spinning only) | hi (solid state only)");
+  b.field("calibration", c.calibration,
+          "extrinsics source: config (T_imu_sensor / time_offset_s below) | auto (estimate at start-up)\n"
+          "| path to a calibration YAML from `mmlio calibrate` (relative to this file)");
+  b.field("reference_lidar", c.reference_lidar,
+          "LiDAR whose sweeps define the fusion window (falls back to the first active one)");
+  b.section("imu", c.imu, [](YamlBinder& s, ImuConfig& v) { bind(s, v); }, "IMU");
+  b.list("lidars", c.lidars, [](YamlBinder& s, LidarConfig& v) { bind(s, v); }, "LiDARs of the rig");
+  b.section("features", c.features, [](YamlBinder& s, FeatureConfig& v) { bind(s, v); }, "feature extraction");
+  b.section("bad_frame", c.bad_frame, [](YamlBinder& s, BadFrameConfig& v) { bind(s, v); },
+            "bad-frame check for solid-state LiDARs");
+  b.section("odometry", c.odometry, [](YamlBinder& s, OdometryConfig& v) { bind(s, v); },
+            "sliding-window odometry");
+  b.section("loop", c.loop, [](YamlBinder& s, LoopConfig& v) { bind(s, v); }, "loop closure");
+  b.section("output", c.output, [](YamlBinder& s, OutputConfig& v) { bind(s, v); }, "outputs");
+}
+
+const char* const kLidarTypes[] = {"velodyne", "ouster", "hesai", "generic_spinning", "livox"};
+
+}  // namespace
+
+// ---- defaults --------------------------------------------------------------------------------
+
+LidarKind LidarConfig::kind() const { return type == "livox" ? LidarKind::kSolidState : LidarKind::kSpinning; }
+
+std::vector<LidarConfig> defaultLidars() {
+  LidarConfig velodyne;
+  velodyne.name = "velodyne";
+  velodyne.type = "velodyne";
+  velodyne.topic = "/velodyne_points";
+  // Placeholder mount: 0.2 m above the Livox IMU, axes aligned. Replace with `mmlio calibrate`
+  // output or the rig drawing.
+  velodyne.T_imu_sensor.translation() = Eigen::Vector3d(0.0, 0.0, 0.2);
+  velodyne.num_rings = 16;
+
+  LidarConfig livox;
+  livox.name = "livox";
+  livox.type = "livox";
+  livox.topic = "/livox/lidar";
+  // Livox Horizon factory LiDAR-to-IMU extrinsic: identity rotation, translation in m.
+  livox.T_imu_sensor.translation() = Eigen::Vector3d(0.05512, 0.02226, -0.0297);
+  livox.num_rings = 6;  // Horizon scans with 6 lines
+  return {velodyne, livox};
+}
+
+// ---- loading ---------------------------------------------------------------------------------
+
+RigConfig parseRigConfig(const std::string& yaml_text, const std::string& source_name) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    throw Error(source_name + ":" + std::to_string(e.mark.line + 1) + ": not valid YAML: " + e.msg);
+  }
+  RigConfig cfg;
+  YamlBinder reader(root, source_name);
+  bind(reader, cfg);
+  reader.finish();
+  cfg.source_path = source_name;
+  validateRigConfig(cfg);
+  return cfg;
+}
+
+RigConfig loadRigConfig(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error("cannot open rig config '" + path + "' (missing file? presets are in config/)");
+  std::stringstream text;
+  text << in.rdbuf();
+  RigConfig cfg = parseRigConfig(text.str(), path);
+  if (cfg.calibration != "config" && cfg.calibration != "auto") {
+    const std::filesystem::path calib(cfg.calibration);
+    if (calib.is_relative())
+      cfg.calibration = (std::filesystem::path(path).parent_path() / calib).lexically_normal().string();
+  }
+  return cfg;
+}
+
+// ---- validation ------------------------------------------------------------------------------
+
+namespace {
+
+class Checker {
+ public:
+  explicit Checker(const std::string& file) : file_(file) {}
+  void require(bool ok, const std::string& key_path, const std::string& problem) const {
+    if (!ok) throw Error(file_ + ": " + key_path + ": " + problem);
+  }
+  template <typename T>
+  void positive(T value, const std::string& key_path) const {
+    require(value > T(0), key_path, "must be > 0, got " + toString(value));
+  }
+  template <typename T>
+  void nonNegative(T value, const std::string& key_path) const {
+    require(value >= T(0), key_path, "must be >= 0, got " + toString(value));
+  }
+
+ private:
+  template <typename T>
+  static std::string toString(T value) {
+    std::ostringstream os;
+    os << value;
+    return os.str();
+  }
+  std::string file_;
+};
+
+std::string join(const std::vector<std::string>& items) {
+  std::string out;
+  for (const auto& s : items) out += (out.empty() ? "" : ", ") + s;
+  return out;
+}
+
+}  // namespace
+
+bool isValidMode(const std::string& mode) { return mode == "hvi" || mode == "vi" || mode == "hi"; }
+
+void validateRigConfig(const RigConfig& cfg) {
+  const Checker check(cfg.source_path);
+  check.require(isValidMode(cfg.mode), "mode", "must be hvi, vi or hi, got '" + cfg.mode + "'");
+  check.require(!cfg.calibration.empty(), "calibration", "must be config, auto or a file path");
+
+  const ImuConfig& imu = cfg.imu;
+  check.require(!imu.topic.empty(), "imu.topic", "must not be empty");
+  check.require(imu.acc_unit == "auto" || imu.acc_unit == "g" || imu.acc_unit == "m/s2", "imu.acc_unit",
+                "must be auto, g or m/s2, got '" + imu.acc_unit + "'");
+  check.positive(imu.acc_noise_density, "imu.acc_noise_density");
+  check.positive(imu.gyro_noise_density, "imu.gyro_noise_density");
+  check.positive(imu.acc_bias_random_walk, "imu.acc_bias_random_walk");
+  check.positive(imu.gyro_bias_random_walk, "imu.gyro_bias_random_walk");
+  check.positive(imu.gravity_m_s2, "imu.gravity_m_s2");
+  check.positive(imu.init_duration_s, "imu.init_duration_s");
+
+  check.require(!cfg.lidars.empty(), "lidars", "at least one LiDAR is needed");
+  std::vector<std::string> names;
+  for (std::size_t i = 0; i < cfg.lidars.size(); ++i) {
+    const LidarConfig& l = cfg.lidars[i];
+    const std::string p = "lidars[" + std::to_string(i) + "].";
+    check.require(!l.name.empty(), p + "name", "is required");
+    for (const auto& n : names) check.require(n != l.name, p + "name", "'" + l.name + "' is used twice");
+    names.push_back(l.name);
+    bool known_type = false;
+    for (const char* t : kLidarTypes) known_type = known_type || l.type == t;
+    check.require(known_type, p + "type",
+                  "must be velodyne, ouster, hesai, generic_spinning or livox, got '" + l.type + "'");
+    check.require(!l.topic.empty(), p + "topic", "is required");
+    check.nonNegative(l.min_range_m, p + "min_range_m");
+    check.require(l.max_range_m > l.min_range_m, p + "max_range_m", "must be > min_range_m");
+    check.positive(l.num_rings, p + "num_rings");
+    validateRigidTransform(l.T_imu_sensor.matrix(), cfg.source_path + ": " + p + "T_imu_sensor");
+  }
+  bool reference_known = false;
+  for (const auto& n : names) reference_known = reference_known || n == cfg.reference_lidar;
+  check.require(reference_known, "reference_lidar", "'" + cfg.reference_lidar + "' is not one of the lidars (" + join(names) + ")");
+  check.require(!activeLidars(cfg, cfg.mode).empty(), "mode", "'" + cfg.mode + "' uses no enabled LiDAR of this rig (vi needs a spinning one, hi a livox)");
+
+  check.positive(cfg.features.neighbours, "features.neighbours");
+  check.nonNegative(cfg.features.edge_threshold, "features.edge_threshold");
+  check.nonNegative(cfg.features.plane_threshold, "features.plane_threshold");
+  check.require(cfg.features.plane_threshold <= cfg.features.edge_threshold, "features.plane_threshold",
+                "must be <= features.edge_threshold");
+  check.positive(cfg.features.continuity_jump_m, "features.continuity_jump_m");
+
+  check.nonNegative(cfg.bad_frame.min_edge_range_m, "bad_frame.min_edge_range_m");
+  check.nonNegative(cfg.bad_frame.min_edge_points, "bad_frame.min_edge_points");
+
+  const OdometryConfig& o = cfg.odometry;
+  check.positive(o.edge_voxel_m, "odometry.edge_voxel_m");
+  check.positive(o.plane_voxel_m, "odometry.plane_voxel_m");
+  check.positive(o.map_voxel_m, "odometry.map_voxel_m");
+  check.positive(o.local_map_radius_m, "odometry.local_map_radius_m");
+  check.positive(o.window_size, "odometry.window_size");
+  check.nonNegative(o.keyframe_rotation_deg, "odometry.keyframe_rotation_deg");
+  check.nonNegative(o.keyframe_translation_m, "odometry.keyframe_translation_m");
+  check.nonNegative(o.keyframe_interval_s, "odometry.keyframe_interval_s");
+  check.positive(o.max_iterations, "odometry.max_iterations");
+  check.positive(o.huber_loss_m, "odometry.huber_loss_m");
+
+  check.positive(cfg.loop.search_radius_m, "loop.search_radius_m");
+  check.nonNegative(cfg.loop.min_time_gap_s, "loop.min_time_gap_s");
+  check.positive(cfg.loop.max_fitness_m, "loop.max_fitness_m");
+  check.require(cfg.loop.min_overlap >= 0 && cfg.loop.min_overlap <= 1, "loop.min_overlap", "must be within 0..1");
+
+  check.nonNegative(cfg.output.map_voxel_m, "output.map_voxel_m");
+}
+
+// ---- emitting --------------------------------------------------------------------------------
+
+std::string toYaml(const RigConfig& cfg) {
+  RigConfig copy = cfg;
+  return documentedYaml(copy, [](YamlBinder& b, RigConfig& c) { bind(b, c); });
+}
+
+std::string defaultConfigYaml() {
+  return "# mmlio rig configuration: every parameter with its meaning, unit and default.\n"
+         "# Unknown keys are errors; absent keys take the default shown.\n" +
+         toYaml(RigConfig{});
+}
+
+// ---- modes -----------------------------------------------------------------------------------
+
+std::vector<const LidarConfig*> activeLidars(const RigConfig& cfg, const std::string& mode) {
+  if (!isValidMode(mode)) throw Error("unknown mode '" + mode + "' (hvi, vi or hi)");
+  std::vector<const LidarConfig*> active;
+  for (const auto& l : cfg.lidars) {
+    if (!l.enabled) continue;
+    const bool spinning = l.kind() == LidarKind::kSpinning;
+    if (mode == "hvi" || (mode == "vi" && spinning) || (mode == "hi" && !spinning)) active.push_back(&l);
+  }
+  return active;
+}
+
+const LidarConfig& referenceLidar(const RigConfig& cfg, const std::string& mode) {
+  const auto active = activeLidars(cfg, mode);
+  if (active.empty())
+    throw Error(cfg.source_path + ": mode '" + mode + "' uses no enabled LiDAR of this rig");
+  for (const LidarConfig* l : active)
+    if (l->name == cfg.reference_lidar) return *l;
+  return *active.front();
+}
+
+LidarExtrinsic toExtrinsic(const LidarConfig& lidar) {
+  LidarExtrinsic e;
+  e.name = lidar.name;
+  e.kind = lidar.kind();
+  e.T_imu_sensor = lidar.T_imu_sensor;
+  e.time_offset_s = lidar.time_offset_s;
+  return e;
+}
+
+std::vector<std::string> applyCalibration(RigConfig& cfg, const Calibration& calibration) {
+  for (const auto& [name, calib] : calibration) {
+    bool found = false;
+    for (auto& l : cfg.lidars) {
+      if (l.name != name) continue;
+      l.T_imu_sensor = calib.T_imu_sensor;
+      l.time_offset_s = calib.time_offset_s;
+      found = true;
+    }
+    if (!found) {
+      std::vector<std::string> names;
+      for (const auto& l : cfg.lidars) names.push_back(l.name);
+      throw Error("calibration names LiDAR '" + name + "' which the rig config does not have (" + join(names) + ")");
+    }
+  }
+  std::vector<std::string> uncovered;
+  for (const auto& l : cfg.lidars)
+    if (!calibration.count(l.name)) uncovered.push_back(l.name);
+  return uncovered;
+}
+
+}  // namespace mmlio::io

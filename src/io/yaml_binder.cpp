@@ -1,0 +1,208 @@
+#include "mmlio/io/yaml_binder.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include "mmlio/core/error.hpp"
+#include "mmlio/io/trajectory_writer.hpp"
+
+namespace mmlio::io {
+
+namespace {
+
+std::string describe(const YAML::Node& node) {
+  switch (node.Type()) {
+    case YAML::NodeType::Null: return "nothing (null)";
+    case YAML::NodeType::Sequence: return "a sequence";
+    case YAML::NodeType::Map: return "a map";
+    case YAML::NodeType::Scalar: return "'" + node.Scalar() + "'";
+    default: return "an undefined node";
+  }
+}
+
+[[noreturn]] void typeError(const YAML::Node& node, const std::string& where, const std::string& expected) {
+  throw Error(where + ": expected " + expected + ", got " + describe(node));
+}
+
+}  // namespace
+
+std::string yamlLocation(const std::string& file, const YAML::Node& node) {
+  const YAML::Mark mark = node.Mark();
+  if (mark.is_null() || mark.line < 0) return file;
+  return file + ":" + std::to_string(mark.line + 1);
+}
+
+void decodeYaml(const YAML::Node& node, const std::string& where, bool& value) {
+  if (!node.IsScalar()) typeError(node, where, "true or false");
+  try {
+    value = node.as<bool>();
+  } catch (const YAML::Exception&) {
+    typeError(node, where, "true or false");
+  }
+}
+
+void decodeYaml(const YAML::Node& node, const std::string& where, int& value) {
+  if (!node.IsScalar()) typeError(node, where, "an integer");
+  try {
+    value = node.as<int>();
+  } catch (const YAML::Exception&) {
+    typeError(node, where, "an integer");
+  }
+}
+
+void decodeYaml(const YAML::Node& node, const std::string& where, double& value) {
+  if (!node.IsScalar()) typeError(node, where, "a number");
+  try {
+    value = node.as<double>();
+  } catch (const YAML::Exception&) {
+    typeError(node, where, "a number");
+  }
+}
+
+void decodeYaml(const YAML::Node& node, const std::string& where, std::string& value) {
+  if (!node.IsScalar()) typeError(node, where, "a string");
+  value = node.Scalar();
+}
+
+void decodeYaml(const YAML::Node& node, const std::string& where, std::vector<double>& value) {
+  if (!node.IsSequence()) typeError(node, where, "a sequence of numbers");
+  std::vector<double> out(node.size());
+  for (std::size_t i = 0; i < node.size(); ++i) decodeYaml(node[i], where + "[" + std::to_string(i) + "]", out[i]);
+  value = std::move(out);
+}
+
+void decodeYaml(const YAML::Node& node, const std::string& where, Eigen::Isometry3d& value) {
+  std::vector<double> numbers;
+  decodeYaml(node, where, numbers);
+  if (numbers.size() != 16)
+    throw Error(where + ": expected 16 numbers (4x4 row-major), got " + std::to_string(numbers.size()));
+  Eigen::Matrix4d m;
+  for (int k = 0; k < 16; ++k) m(k / 4, k % 4) = numbers[k];
+  validateRigidTransform(m, where);
+  value.matrix() = m;
+}
+
+void validateRigidTransform(const Eigen::Matrix4d& m, const std::string& where) {
+  if (!m.allFinite()) throw Error(where + ": transform has non-finite entries");
+  if (m(3, 0) != 0.0 || m(3, 1) != 0.0 || m(3, 2) != 0.0 || m(3, 3) != 1.0)
+    throw Error(where + ": bottom row must be 0 0 0 1");
+  const Eigen::Matrix3d R = m.topLeftCorner<3, 3>();
+  const double orthonormality_error = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (orthonormality_error > 1e-6) {
+    std::ostringstream os;
+    os << where << ": rotation is not orthonormal (max |R^T R - I| = " << orthonormality_error
+       << " > 1e-6); write it with at least 7 significant digits";
+    throw Error(os.str());
+  }
+  if (R.determinant() < 0) throw Error(where + ": rotation has determinant -1 (a reflection, not a rotation)");
+}
+
+std::string encodeYaml(bool value, int) { return value ? "true" : "false"; }
+std::string encodeYaml(int value, int) { return std::to_string(value); }
+
+std::string encodeYaml(double value, int) {
+  if (std::isnan(value)) return ".nan";
+  if (std::isinf(value)) return value > 0 ? ".inf" : "-.inf";
+  std::string text = formatDouble(value);
+  if (text.find_first_of(".e") == std::string::npos) text += ".0";  // keep it visibly a float
+  return text;
+}
+
+std::string encodeYaml(const std::string& value, int) {
+  YAML::Emitter emitter;
+  emitter << value;
+  return emitter.c_str();
+}
+
+std::string encodeYaml(const std::vector<double>& value, int) {
+  std::string text = "[";
+  for (std::size_t i = 0; i < value.size(); ++i) text += (i ? ", " : "") + encodeYaml(value[i], 0);
+  return text + "]";
+}
+
+std::string encodeYaml(const Eigen::Isometry3d& value, int indent) {
+  // One matrix row per line, continuation lines aligned under the first number.
+  const Eigen::Matrix4d m = value.matrix();
+  std::string text = "[";
+  for (int r = 0; r < 4; ++r) {
+    if (r > 0) text += ",\n" + std::string(static_cast<std::size_t>(indent), ' ');
+    for (int c = 0; c < 4; ++c) text += (c ? ", " : "") + formatDouble(m(r, c));
+  }
+  return text + "]";
+}
+
+YamlBinder::YamlBinder(const YAML::Node& node, std::string file, std::string prefix)
+    : mode_(Mode::kRead), prefix_(std::move(prefix)), node_(node), file_(std::move(file)) {
+  if (node_.IsDefined() && !node_.IsNull() && !node_.IsMap()) {
+    const std::string name = prefix_.empty() ? std::string("top level") : prefix_.substr(0, prefix_.size() - 1);
+    throw Error(yamlLocation(file_, node_) + ": " + name + ": expected a map of keys, got " + describe(node_));
+  }
+}
+
+YamlBinder::YamlBinder(std::ostream& out, int indent, const Defaults* defaults, std::string prefix)
+    : mode_(Mode::kEmit), prefix_(std::move(prefix)), out_(&out), indent_(indent), defaults_(defaults) {}
+
+YamlBinder::YamlBinder(Defaults* record, std::string prefix)
+    : mode_(Mode::kRecord), prefix_(std::move(prefix)), record_(record) {}
+
+std::string YamlBinder::defaultText(const Eigen::Isometry3d& value) {
+  if (value.matrix().isIdentity(0.0)) return "identity";
+  std::string text = encodeYaml(value, 0);
+  for (char& c : text)
+    if (c == '\n') c = ' ';
+  return text;
+}
+
+std::string YamlBinder::withDefault(const std::string& key, const std::string& doc) const {
+  if (!defaults_) return doc;
+  const auto it = defaults_->find(prefix_ + key);
+  if (it == defaults_->end() || it->second.empty() || it->second == "\"\"") return doc;
+  return doc + " (default: " + it->second + ")";
+}
+
+YAML::Node YamlBinder::lookup(const std::string& key) {
+  declared_.push_back(key);
+  if (!node_.IsMap()) return YAML::Node(YAML::NodeType::Undefined);
+  const YAML::Node& map = node_;  // const: operator[] must not insert
+  for (auto it = map.begin(); it != map.end(); ++it)
+    if (it->first.IsScalar() && it->first.Scalar() == key) return it->second;
+  return YAML::Node(YAML::NodeType::Undefined);
+}
+
+std::string YamlBinder::where(const std::string& key, const YAML::Node& node) const {
+  return yamlLocation(file_, node) + ": " + path(key);
+}
+
+void YamlBinder::throwNotA(const std::string& what, const std::string& key, const YAML::Node& node) const {
+  typeError(node, where(key, node), what);
+}
+
+void YamlBinder::finish() const {
+  if (!reading() || !node_.IsMap()) return;
+  for (auto it = node_.begin(); it != node_.end(); ++it) {
+    const std::string key = it->first.IsScalar() ? it->first.Scalar() : "<non-scalar key>";
+    bool known = false;
+    for (const auto& d : declared_) known = known || d == key;
+    if (known) continue;
+    std::string keys;
+    for (const auto& d : declared_) keys += (keys.empty() ? "" : ", ") + d;
+    throw Error(yamlLocation(file_, it->first) + ": unknown key '" + path(key) + "' (known keys" +
+                (prefix_.empty() ? std::string() : " in " + prefix_.substr(0, prefix_.size() - 1)) + ": " + keys + ")");
+  }
+}
+
+void YamlBinder::emitKey(const std::string& key, const std::string& doc, const std::string& value_text) {
+  std::ostream& out = *out_;
+  const std::string pad(static_cast<std::size_t>(indent_), ' ');
+  std::istringstream doc_lines(doc);
+  for (std::string line; std::getline(doc_lines, line);) out << pad << "# " << line << '\n';
+  if (list_item_pending_) {
+    out << pad << "- " << key << ':' << value_text << '\n';
+    list_item_pending_ = false;
+    indent_ += 2;  // the item's remaining keys align with the first one
+  } else {
+    out << pad << key << ':' << value_text << '\n';
+  }
+}
+
+}  // namespace mmlio::io
