@@ -155,6 +155,9 @@ RigConfig loadRigConfig(const std::string& path) {
     const std::filesystem::path calib(cfg.calibration);
     if (calib.is_relative())
       cfg.calibration = (std::filesystem::path(path).parent_path() / calib).lexically_normal().string();
+    if (!std::filesystem::exists(cfg.calibration))
+      throw Error(path + ": calibration: file '" + cfg.calibration +
+                  "' not found (use config, auto, or the output of `mmlio calibrate`)");
   }
   return cfg;
 }

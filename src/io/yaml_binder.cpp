@@ -179,8 +179,12 @@ void YamlBinder::throwNotA(const std::string& what, const std::string& key, cons
 
 void YamlBinder::finish() const {
   if (!reading() || !node_.IsMap()) return;
+  std::vector<std::string> seen;
   for (auto it = node_.begin(); it != node_.end(); ++it) {
     const std::string key = it->first.IsScalar() ? it->first.Scalar() : "<non-scalar key>";
+    for (const auto& s : seen)
+      if (s == key) throw Error(yamlLocation(file_, it->first) + ": duplicate key '" + path(key) + "'");
+    seen.push_back(key);
     bool known = false;
     for (const auto& d : declared_) known = known || d == key;
     if (known) continue;

@@ -179,6 +179,9 @@ TEST(Loading, ListReplacesTheDefaultLidars) {
 TEST(Loading, RelativeCalibrationPathResolvesAgainstTheConfigDirectory) {
   TempDir dir;
   const std::string path = dir.write("rig.yaml", "calibration: calib/out.yaml\n");
+  EXPECT_ERROR_CONTAINS(loadRigConfig(path), "calibration: file '" + (dir.path / "calib/out.yaml").string() + "' not found");
+  fs::create_directories(dir.path / "calib");
+  dir.write("calib/out.yaml", "");
   EXPECT_EQ(loadRigConfig(path).calibration, (dir.path / "calib/out.yaml").string());
   EXPECT_EQ(loadRigConfig(dir.write("rig2.yaml", "calibration: auto\n")).calibration, "auto");
 }
@@ -215,6 +218,11 @@ TEST(Strict, WrongTypeErrorNamesTheKeyPath) {
   EXPECT_ERROR_CONTAINS(parseRigConfig("lidars: velodyne\n", "rig.yaml"), "lidars: expected a sequence");
   EXPECT_ERROR_CONTAINS(parseRigConfig("features:\n  edge_threshold:\n", "rig.yaml"),
                         "features.edge_threshold: expected a number, got nothing");
+}
+
+TEST(Strict, DuplicateKeyIsAnError) {
+  EXPECT_ERROR_CONTAINS(parseRigConfig("loop:\n  enabled: true\n  enabled: false\n", "d.yaml"),
+                        "d.yaml:3: duplicate key 'loop.enabled'");
 }
 
 TEST(Strict, MissingFileErrorNamesThePath) {

@@ -97,7 +97,7 @@ struct RigConfig {
   std::string source_path;                 // file it was loaded from (not a YAML key)
 };
 
-/// Loads and validates. Relative calibration paths are resolved against the file's directory.
+/// Loads and validates. A calibration path is resolved against the file's directory and must exist.
 RigConfig loadRigConfig(const std::string& path);
 /// Same from YAML text; `source_name` names it in errors.
 RigConfig parseRigConfig(const std::string& yaml_text, const std::string& source_name = "<config>");

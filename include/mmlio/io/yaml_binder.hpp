@@ -148,8 +148,8 @@ class YamlBinder {
     return *this;
   }
 
-  /// Reading: throws mmlio::Error naming the first key that no field/section/list declared, with
-  /// the declared keys as the fix. Otherwise a no-op.
+  /// Reading: throws mmlio::Error naming the first key that no field/section/list declared (with
+  /// the declared keys as the fix) or that appears twice. Otherwise a no-op.
   void finish() const;
 
   /// Key path of `key` for messages, e.g. "lidars[1].topic".
