@@ -1,5 +1,6 @@
 #include "mmlio/io/pcd_io.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -59,6 +60,66 @@ void writePcdBinary(const std::string& path, const std::vector<Point>& points) {
         buffer.insert(buffer.end(), {p.xyz.x(), p.xyz.y(), p.xyz.z(), p.intensity});
       }
       out.write(reinterpret_cast<const char*>(buffer.data()), static_cast<std::streamsize>(buffer.size() * sizeof(float)));
+    }
+  });
+}
+
+namespace {
+
+void encodeValue(double value, const PcdField& f, char* out) {
+  switch (f.type) {
+    case 'F':
+      if (f.size == 4) { const float v = static_cast<float>(value); std::memcpy(out, &v, 4); return; }
+      std::memcpy(out, &value, 8);
+      return;
+    case 'U': {
+      const std::uint64_t v = static_cast<std::uint64_t>(std::llround(std::max(0.0, value)));
+      std::memcpy(out, &v, static_cast<std::size_t>(f.size));  // little endian: low bytes first
+      return;
+    }
+    default: {
+      const std::int64_t v = std::llround(value);
+      std::memcpy(out, &v, static_cast<std::size_t>(f.size));
+      return;
+    }
+  }
+}
+
+}  // namespace
+
+void writePcdFieldsBinary(const std::string& path, const PcdCloud& cloud) {
+  const auto& fields = cloud.header.fields;
+  if (fields.size() != cloud.fields.size() || fields.size() != cloud.columns.size())
+    throw Error("writing PCD '" + path + "': header.fields, fields and columns differ in length");
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    const PcdField& f = fields[i];
+    const bool ok_type = (f.type == 'F' && (f.size == 4 || f.size == 8)) ||
+                         ((f.type == 'U' || f.type == 'I') && (f.size == 1 || f.size == 2 || f.size == 4 || f.size == 8));
+    if (f.name != cloud.fields[i] || f.count != 1 || !ok_type)
+      throw Error("writing PCD '" + path + "': field '" + f.name + "' must match its column, COUNT 1, TYPE F4/F8/U*/I*");
+    if (cloud.columns[i].size() != cloud.size())
+      throw Error("writing PCD '" + path + "': column '" + f.name + "' has a different length");
+  }
+  const std::size_t n = cloud.size();
+  std::string names, sizes, types, counts;
+  for (const auto& f : fields) {
+    names += " " + f.name;
+    sizes += " " + std::to_string(f.size);
+    types += std::string(" ") + f.type;
+    counts += " 1";
+  }
+  writeFileAtomically(path, [&](std::ostream& out) {
+    out << "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS" << names << "\nSIZE" << sizes
+        << "\nTYPE" << types << "\nCOUNT" << counts << "\nWIDTH " << n << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS "
+        << n << "\nDATA binary\n";
+    std::vector<char> row(cloud.header.pointStepBytes());
+    for (std::size_t p = 0; p < n; ++p) {
+      std::size_t offset = 0;
+      for (std::size_t i = 0; i < fields.size(); ++i) {
+        encodeValue(cloud.columns[i][p], fields[i], row.data() + offset);
+        offset += static_cast<std::size_t>(fields[i].size);
+      }
+      out.write(row.data(), static_cast<std::streamsize>(row.size()));
     }
   });
 }

@@ -244,6 +244,21 @@ TEST(Pcd, BinaryRoundTripKeepsEveryFloatExactly) {
   }
 }
 
+TEST(Pcd, GenericFieldsRoundTripWithTheirTypes) {
+  TempDir dir;
+  PcdCloud in;
+  in.header.fields = {{"x", 4, 'F', 1}, {"ring", 2, 'U', 1}, {"t", 8, 'F', 1}, {"d", 1, 'I', 1}};
+  in.fields = {"x", "ring", "t", "d"};
+  in.columns = {{0.5, -1.25, 3.0}, {0, 15, 65535}, {1673400472.138016708, 1e-9, -2.0}, {-128, 0, 127}};
+  writePcdFieldsBinary(dir.file("g.pcd"), in);
+  const PcdCloud out = readPcdFields(dir.file("g.pcd"));
+  EXPECT_EQ(out.header.pointStepBytes(), 4u + 2u + 8u + 1u);
+  EXPECT_EQ(out.fields, in.fields);
+  EXPECT_EQ(out.columns, in.columns);  // all values representable exactly in their types
+  in.header.fields[1].count = 2;
+  EXPECT_THROW(writePcdFieldsBinary(dir.file("bad.pcd"), in), Error);
+}
+
 TEST(Pcd, EmptyCloudWritesAndReadsBack) {
   TempDir dir;
   writePcdBinary(dir.file("empty.pcd"), {});

@@ -56,6 +56,12 @@ std::string pcdBinaryHeader(std::size_t num_points);
 /// Writes x y z intensity (float32, binary), atomically. Throws mmlio::Error naming the path.
 void writePcdBinary(const std::string& path, const std::vector<Point>& points);
 
+/// Writes any fields, `DATA binary`, atomically: one column per entry of cloud.header.fields (COUNT
+/// 1, names equal to cloud.fields), each stored with its field's TYPE and SIZE (values converted
+/// from double, integers rounded). Width = size(), height 1. E.g. a scan with ring (U2) and time
+/// (F4) fields for other tools. Throws mmlio::Error naming the path on inconsistent input.
+void writePcdFieldsBinary(const std::string& path, const PcdCloud& cloud);
+
 /// Parses the header only. Throws mmlio::Error naming the path on a malformed header.
 PcdHeader readPcdHeader(const std::string& path);
 
