@@ -1,0 +1,113 @@
+// `mmlio evaluate`: compares an estimated TUM trajectory with ground truth (ATE, RPE per 10 m,
+// end-to-end error, coverage), optionally writing the evaluation figure.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "commands.hpp"
+#include "mmlio/core/error.hpp"
+#include "mmlio/eval/evaluation.hpp"
+#include "mmlio/eval/plot_evaluation.hpp"
+#include "mmlio/io/trajectory_writer.hpp"
+
+namespace mmlio::apps {
+namespace {
+
+struct EvaluateArgs {
+  std::string gt_path;
+  std::string est_path;
+  std::string plot_path;
+  bool json = false;
+  bool no_align = false;
+  bool scale = false;
+  eval::EvalOptions options;
+};
+
+Trajectory readNonEmptyTum(const std::string& path, const char* what) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error))
+    throw Error(std::string(what) + " trajectory '" + path + "' does not exist or is not a file");
+  Trajectory trajectory = io::readTum(path);
+  if (trajectory.empty()) throw Error(std::string(what) + " trajectory '" + path + "' has no poses");
+  return trajectory;
+}
+
+std::string row(const char* name, double value, const char* unit, const char* format = "%.4f") {
+  char number[64];
+  if (std::isfinite(value)) std::snprintf(number, sizeof(number), format, value);
+  else std::snprintf(number, sizeof(number), "n/a");
+  char line[160];
+  std::snprintf(line, sizeof(line), "  %-22s %12s%s%s\n", name, number, *unit ? " " : "", unit);
+  return line;
+}
+
+void printTable(const eval::EvalResult& r, const EvaluateArgs& args) {
+  std::string out;
+  out += "trajectory evaluation\n";
+  out += "  ground truth           " + args.gt_path + "\n";
+  out += "  estimate               " + args.est_path + "\n";
+  out += row("associated poses", static_cast<double>(r.num_associated), "", "%.0f");
+  out += row("coverage", 100.0 * r.coverage, "% of GT time span", "%.1f");
+  out += row("GT path length", r.path_length_m, "m", "%.1f");
+  out += std::string("  alignment              ") +
+         (args.no_align ? "none" : (args.scale ? "Umeyama SE(3) + scale" : "Umeyama SE(3)")) + "\n";
+  if (args.scale) out += row("scale", r.scale, "");
+  out += row("ATE RMSE", r.ate_rmse_m, "m");
+  out += row("ATE mean", r.ate_mean_m, "m");
+  out += row("ATE median", r.ate_median_m, "m");
+  out += row("ATE max", r.ate_max_m, "m");
+  char segment[64];
+  std::snprintf(segment, sizeof(segment), "RPE %g m translation", args.options.segment_m);
+  out += row(segment, r.rpe_10m_pct, "%", "%.3f");
+  std::snprintf(segment, sizeof(segment), "RPE %g m rotation", args.options.segment_m);
+  out += row(segment, r.rpe_10m_deg_per_m, "deg/m", "%.5f");
+  out += row("RPE segments", static_cast<double>(r.rpe_num_segments), "", "%.0f");
+  out += row("end-to-end (estimate)", r.end_to_end_m, "m");
+  out += row("end-to-end (GT)", r.gt_end_to_end_m, "m");
+  std::cout << out;
+}
+
+void runEvaluate(const EvaluateArgs& args) {
+  eval::EvalOptions options = args.options;
+  options.align = !args.no_align;
+  options.scale = args.scale;
+  if (!(options.max_gap_s > 0.0)) throw Error("evaluate: --max-gap must be positive, got " + std::to_string(options.max_gap_s));
+  if (!(options.segment_m > 0.0)) throw Error("evaluate: --segment must be positive");
+  if (args.no_align && args.scale) throw Error("evaluate: --scale needs alignment; drop --no-align");
+
+  const Trajectory gt = readNonEmptyTum(args.gt_path, "ground-truth");
+  const Trajectory est = readNonEmptyTum(args.est_path, "estimated");
+  const eval::EvalResult result = eval::evaluate(gt, est, options);
+  if (!args.plot_path.empty()) eval::plotEvaluation(result, args.plot_path);
+
+  if (args.json) std::cout << eval::toJsonLine(result) << '\n';
+  else {
+    printTable(result, args);
+    if (!args.plot_path.empty()) std::cout << "  plot                   " << args.plot_path << '\n';
+  }
+}
+
+}  // namespace
+
+void registerEvaluateCommand(CLI::App& app) {
+  auto args = std::make_shared<EvaluateArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "evaluate", "Compare an estimated trajectory with ground truth (TUM files): ATE, RPE per 10 m, end-to-end, coverage");
+  cmd->add_option("--gt", args->gt_path, "Ground-truth trajectory, TUM format")->required();
+  cmd->add_option("--est", args->est_path, "Estimated trajectory, TUM format")->required();
+  cmd->add_option("--plot", args->plot_path, "Write the evaluation figure (top view + error over time) to this PNG");
+  cmd->add_flag("--json", args->json, "Print exactly one line of JSON instead of the table");
+  cmd->add_option("--max-gap", args->options.max_gap_s,
+                  "Max distance from an estimate stamp to the nearest GT sample, s")
+      ->capture_default_str();
+  cmd->add_option("--segment", args->options.segment_m, "RPE segment length along the GT path, m")
+      ->capture_default_str();
+  cmd->add_flag("--no-align", args->no_align, "Compare in the raw frames (no Umeyama alignment)");
+  cmd->add_flag("--scale", args->scale, "Also estimate a scale in the alignment (Sim(3))");
+  cmd->callback([args] { runEvaluate(*args); });
+}
+
+}  // namespace mmlio::apps
