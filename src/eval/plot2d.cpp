@@ -187,7 +187,7 @@ void Plot2D::draw(Canvas& canvas, int x, int y, int width, int height) const {
     }
   }
 
-  // Legend in the top-right corner of the plot area.
+  // Legend inside the plot area, in the configured corner.
   std::vector<const Series*> labelled;
   for (const Series& series : series_)
     if (!series.label.empty()) labelled.push_back(&series);
@@ -196,7 +196,12 @@ void Plot2D::draw(Canvas& canvas, int x, int y, int width, int height) const {
     int text_w = 0;
     for (const Series* series : labelled) text_w = std::max(text_w, Canvas::textWidth(series->label, s));
     const int box_w = swatch + text_w + 4 * gap, box_h = static_cast<int>(labelled.size()) * row_h + gap;
-    const int bx = left + plot_w - box_w - gap, by = top + gap;
+    using Corner = Config::Corner;
+    const Corner corner = config_.legend_corner;
+    const bool at_right = corner == Corner::kTopRight || corner == Corner::kBottomRight;
+    const bool at_top = corner == Corner::kTopRight || corner == Corner::kTopLeft;
+    const int bx = at_right ? left + plot_w - box_w - gap : left + gap;
+    const int by = at_top ? top + gap : top + plot_h - box_h - gap;
     canvas.fillRect(bx, by, box_w, box_h, colors::kWhite);
     canvas.rect(bx, by, box_w, box_h, colors::kGrey);
     for (size_t k = 0; k < labelled.size(); ++k) {

@@ -61,6 +61,7 @@ Canvas renderEvaluation(const EvalResult& r) {
                  " %,  end-to-end " + format("%.2f", r.end_to_end_m) + " m";
   config.x_label = "time since GT start [s]";
   config.y_label = "error [m]";
+  config.legend_corner = Plot2D::Config::Corner::kTopLeft;
   Plot2D errors(config);
   std::vector<Eigen::Vector2d> series;
   series.reserve(r.times_s.size());
@@ -72,7 +73,8 @@ Canvas renderEvaluation(const EvalResult& r) {
   }
   for (double e : r.errors_m) e_hi = std::max(e_hi, e);
   if (t_hi > t_lo) errors.setXRange(t_lo, t_hi);
-  errors.setYRange(0.0, e_hi > 0.0 ? 1.1 * e_hi : 1.0);  // errors are >= 0: start the axis at 0
+  // Errors are >= 0, so the axis starts at 0; the headroom above keeps the legend off the curve.
+  errors.setYRange(0.0, e_hi > 0.0 ? 1.35 * e_hi : 1.0);
   if (std::isfinite(r.ate_rmse_m) && t_hi > t_lo)
     errors.addLine({{t_lo, r.ate_rmse_m}, {t_hi, r.ate_rmse_m}}, colors::kGrey, 1.0, "RMSE");
   errors.addLine(std::move(series), colors::kEstimate, 2.0, "ATE");

@@ -156,5 +156,40 @@ namespace {
 TEST(Plot, WritesAFigureForInspectionWhenAsked) {
   if (const char* keep = std::getenv("MMLIO_KEEP_PLOT")) plotEvaluation(loopResult(), keep);
 }
+
+// Map-style top view: many grey points by intensity, the trajectory on top. Checks that the
+// trajectory stays visible over the scatter and the darkest map pixels are present.
+TEST(Plot2D, MapScatterUnderATrajectoryKeepsBothVisible) {
+  Plot2D::Config config;
+  config.title = "map top view";
+  config.x_label = "x [m]";
+  config.y_label = "y [m]";
+  config.equal_aspect = true;
+  Plot2D plot(config);
+  std::vector<Eigen::Vector2d> points;
+  std::vector<Rgb> shades;
+  for (int i = 0; i < 60000; ++i) {  // a noisy rectangular "building" outline, intensity by side
+    const double u = (i % 1000) / 1000.0, side = (i / 1000) % 4;
+    const double jitter = 0.3 * std::sin(i * 12.9898);
+    const Eigen::Vector2d corner[5] = {{-40, -25}, {40, -25}, {40, 25}, {-40, 25}, {-40, -25}};
+    const int k = static_cast<int>(side);
+    points.push_back(corner[k] + u * (corner[k + 1] - corner[k]) + Eigen::Vector2d(jitter, -jitter));
+    shades.push_back(colors::greyscale(0.25 * (side + 1)));
+  }
+  plot.addScatter(points, shades, 0.0, "");
+  std::vector<Eigen::Vector2d> path;
+  for (int i = 0; i <= 400; ++i) {
+    const double a = 2 * M_PI * i / 400.0;
+    path.emplace_back(30 * std::cos(a), 15 * std::sin(a));
+  }
+  plot.addLine(path, colors::kEstimate, 2.0, "trajectory");
+  Canvas canvas(900, 700);
+  plot.draw(canvas, 0, 0, 900, 700);
+  Image image{canvas.width(), canvas.height(), canvas.rgb()};
+  EXPECT_TRUE(image.has(colors::kEstimate));
+  EXPECT_TRUE(image.has(colors::greyscale(1.0)));
+  EXPECT_TRUE(image.has(colors::greyscale(0.25)));
+  if (const char* keep = std::getenv("MMLIO_KEEP_MAP_PLOT")) canvas.savePng(keep);
+}
 }  // namespace
 }  // namespace mmlio::eval

@@ -20,7 +20,9 @@ class Plot2D {
     std::string x_label;         // e.g. "x [m]"
     std::string y_label;         // drawn vertically left of the y ticks
     bool equal_aspect = false;   // same metres per pixel on both axes (top views)
-    bool legend = true;          // legend box in the top-right corner for labelled series
+    bool legend = true;          // legend box for labelled series
+    enum class Corner { kTopRight, kTopLeft, kBottomRight, kBottomLeft };
+    Corner legend_corner = Corner::kTopRight;  // where the legend sits inside the axes
     int text_scale = 2;          // font pixel size of ticks and labels
     double margin_fraction = 0.04;  // data-range padding on each side when ranges are automatic
   };
