@@ -93,3 +93,12 @@ void Json::dumpTo(std::string& out, int indent, int depth) const {
 }
 
 }  // namespace mmlio::pipeline
+
+namespace mmlio::pipeline {
+
+std::string Json::text() const {
+  if (kind_ == Kind::kString) return string_;
+  return dump(-1);
+}
+
+}  // namespace mmlio::pipeline

@@ -29,6 +29,13 @@ class Json {
   Json& operator[](const std::string& key);
   void push_back(Json value);
 
+  bool isObject() const { return kind_ == Kind::kObject; }
+  bool isScalar() const { return kind_ != Kind::kObject && kind_ != Kind::kArray; }
+  /// Members of an object in insertion order (empty for other kinds).
+  const std::vector<std::pair<std::string, Json>>& members() const { return members_; }
+  /// Text of a scalar without JSON quoting ("0.25", "hvi", "true", "null").
+  std::string text() const;
+
   /// Serialises; indent < 0 gives one line.
   std::string dump(int indent = 2) const;
 

@@ -1,0 +1,41 @@
+#pragma once
+// The main job: a ROS1 bag in; trajectory.tum, map.pcd and report.json (and report.md) out.
+//
+// Stream: io::BagSource (time order) -> IMU to the odometry, LiDAR scans shifted by their clock
+// offsets into lidar::SweepAligner -> fused sweeps wait until the IMU covers their end ->
+// estimator::Odometry -> trajectory + map accumulator. A failure mid-bag still writes what was
+// computed (marked incomplete in the report) before the error is reported.
+#include <functional>
+#include <string>
+
+#include "mmlio/core/types.hpp"
+#include "mmlio/io/rig_config.hpp"
+#include "mmlio/pipeline/json.hpp"
+#include "mmlio/pipeline/stage_stats.hpp"
+
+namespace mmlio::pipeline {
+
+struct RunOptions {
+  std::string bag_path;
+  std::string out_dir;            // empty: write nothing (bench)
+  io::RigConfig config;           // calibration already applied
+  std::string mode;               // empty: config.mode
+  bool progress = true;           // progress bar on stderr
+  std::string gt_path;            // optional TUM ground truth: evaluation in the report
+  double max_duration_s = 0.0;    // > 0: stop after this much bag time
+};
+
+struct RunResult {
+  Trajectory trajectory;          // IMU pose at the end of every tracked sweep
+  StageStats timing;
+  Json report;
+  std::size_t map_points = 0;
+  bool complete = true;           // false: the bag ended in an error after `trajectory`
+  std::string error;
+};
+
+/// Runs the whole pipeline. Throws mmlio::Error for unusable input (no bag, no topic, ...);
+/// an error after tracking started is returned in RunResult::error with outputs written.
+RunResult runBag(const RunOptions& options);
+
+}  // namespace mmlio::pipeline
