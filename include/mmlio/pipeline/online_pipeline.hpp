@@ -1,0 +1,43 @@
+#pragma once
+// The streaming core shared by `mmlio run` (bag) and the ROS node (live topics): IMU samples
+// and LiDAR scans in, in any interleaving; fused, de-skewed, estimated sweeps out once the IMU
+// covers their end.
+#include <deque>
+#include <functional>
+#include <map>
+#include <string>
+
+#include "mmlio/estimator/odometry.hpp"
+#include "mmlio/io/rig_config.hpp"
+#include "mmlio/lidar/sweep_aligner.hpp"
+
+namespace mmlio::pipeline {
+
+class OnlinePipeline {
+ public:
+  using SweepCallback = std::function<void(const estimator::SweepResult&)>;
+
+  /// Throws mmlio::Error on a bad mode or a config with no active LiDAR.
+  OnlinePipeline(const io::RigConfig& cfg, const std::string& mode, SweepCallback on_sweep);
+
+  void addImu(const ImuSample& sample);
+  /// scan.sensor names a configured LiDAR; others are ignored. Its clock offset is applied here.
+  void addScan(LidarScan scan);
+  /// At the end of a stream: processes the sweeps still waiting (IMU permitting).
+  void flush();
+
+  const estimator::Odometry& odometry() const { return odometry_; }
+  std::size_t sweepsProcessed() const { return processed_; }
+
+ private:
+  void drain(bool all);
+
+  std::map<std::string, double> offset_s_;
+  lidar::SweepAligner aligner_;
+  estimator::Odometry odometry_;
+  std::deque<lidar::AlignedSweep> pending_;
+  SweepCallback on_sweep_;
+  std::size_t processed_ = 0;
+};
+
+}  // namespace mmlio::pipeline
