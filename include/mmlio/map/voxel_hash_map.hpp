@@ -1,0 +1,55 @@
+#pragma once
+// Local map as a voxel hash (KISS-ICP style): each voxel keeps at most N points, so memory is
+// bounded by the occupied volume; kNN scans the voxels around the query ring by ring.
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+namespace mmlio::map {
+
+class VoxelHashMap {
+ public:
+  /// voxel_m: voxel edge (m); max_points_per_voxel: further points falling in a full voxel are dropped.
+  VoxelHashMap(double voxel_m, int max_points_per_voxel);
+
+  void add(const std::vector<Eigen::Vector3d>& world_points);
+  /// Drops every voxel whose first point lies farther than radius_m from center.
+  void removeFarFrom(const Eigen::Vector3d& center, double radius_m);
+
+  /// The (up to) k nearest points within max_dist_m of q, sorted by distance, into *out (cleared).
+  /// Exact: scans the 27 voxels around q, then further rings until no closer point can exist.
+  /// Returns the number found.
+  int knn(const Eigen::Vector3d& q, int k, double max_dist_m, std::vector<Eigen::Vector3d>* out) const;
+
+  std::size_t size() const { return num_points_; }  // points stored
+  bool empty() const { return num_points_ == 0; }
+  void clear();
+  std::vector<Eigen::Vector3d> points() const;
+  std::size_t numVoxels() const { return voxels_.size(); }
+  double voxelSizeM() const { return voxel_m_; }
+
+ private:
+  struct Key {
+    int x, y, z;
+    bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
+  };
+  struct KeyHash {
+    std::size_t operator()(const Key& k) const {
+      return static_cast<std::size_t>((static_cast<std::uint64_t>(k.x) * 73856093u) ^
+                                      (static_cast<std::uint64_t>(k.y) * 19349669u) ^
+                                      (static_cast<std::uint64_t>(k.z) * 83492791u));
+    }
+  };
+  Key keyOf(const Eigen::Vector3d& p) const;
+
+  double voxel_m_;
+  double inv_voxel_;
+  int max_points_per_voxel_;
+  std::size_t num_points_ = 0;
+  std::unordered_map<Key, std::vector<Eigen::Vector3d>, KeyHash> voxels_;
+};
+
+}  // namespace mmlio::map

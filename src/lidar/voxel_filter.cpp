@@ -1,0 +1,52 @@
+#include "mmlio/lidar/voxel_filter.hpp"
+
+#include <cmath>
+#include <cstdint>
+#include <unordered_map>
+
+namespace mmlio::lidar {
+namespace {
+
+// 21 bits per axis (±1M voxels) packed in one key: enough for any leaf >= 1 mm over ±1 km.
+std::uint64_t voxelKey(const Eigen::Vector3f& p, double inv_leaf) {
+  const auto idx = [&](float v) {
+    return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(v * inv_leaf)) + (1 << 20)) & 0x1FFFFF;
+  };
+  return (idx(p.x()) << 42) | (idx(p.y()) << 21) | idx(p.z());
+}
+
+struct Accumulator {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  double intensity_sum = 0.0;
+  int count = 0;
+};
+
+}  // namespace
+
+std::vector<Point> voxelDownsample(const std::vector<Point>& pts, double leaf_m) {
+  if (leaf_m <= 0.0) return pts;
+  const double inv_leaf = 1.0 / leaf_m;
+  std::unordered_map<std::uint64_t, std::size_t> slot_of_key;
+  slot_of_key.reserve(pts.size());
+  std::vector<Point> out;
+  std::vector<Accumulator> acc;
+  for (const Point& p : pts) {
+    if (!p.xyz.allFinite()) continue;
+    const auto [it, inserted] = slot_of_key.try_emplace(voxelKey(p.xyz, inv_leaf), out.size());
+    if (inserted) {
+      out.push_back(p);
+      acc.emplace_back();
+    }
+    Accumulator& a = acc[it->second];
+    a.sum += p.xyz.cast<double>();
+    a.intensity_sum += p.intensity;
+    ++a.count;
+  }
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    out[i].xyz = (acc[i].sum / acc[i].count).cast<float>();
+    out[i].intensity = static_cast<float>(acc[i].intensity_sum / acc[i].count);
+  }
+  return out;
+}
+
+}  // namespace mmlio::lidar

@@ -1,0 +1,101 @@
+#include "mmlio/map/voxel_hash_map.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <utility>
+
+namespace mmlio::map {
+
+VoxelHashMap::VoxelHashMap(double voxel_m, int max_points_per_voxel)
+    : voxel_m_(voxel_m > 0 ? voxel_m : 1.0),
+      inv_voxel_(1.0 / voxel_m_),
+      max_points_per_voxel_(std::max(1, max_points_per_voxel)) {}
+
+VoxelHashMap::Key VoxelHashMap::keyOf(const Eigen::Vector3d& p) const {
+  return Key{static_cast<int>(std::floor(p.x() * inv_voxel_)), static_cast<int>(std::floor(p.y() * inv_voxel_)),
+             static_cast<int>(std::floor(p.z() * inv_voxel_))};
+}
+
+void VoxelHashMap::add(const std::vector<Eigen::Vector3d>& world_points) {
+  for (const auto& p : world_points) {
+    if (!p.allFinite()) continue;
+    auto& bucket = voxels_[keyOf(p)];
+    if (bucket.empty()) bucket.reserve(static_cast<std::size_t>(max_points_per_voxel_));
+    if (static_cast<int>(bucket.size()) >= max_points_per_voxel_) continue;
+    bucket.push_back(p);
+    ++num_points_;
+  }
+}
+
+void VoxelHashMap::removeFarFrom(const Eigen::Vector3d& center, double radius_m) {
+  const double r2 = radius_m * radius_m;
+  for (auto it = voxels_.begin(); it != voxels_.end();) {
+    if (it->second.empty() || (it->second.front() - center).squaredNorm() > r2) {
+      num_points_ -= it->second.size();
+      it = voxels_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
+                      std::vector<Eigen::Vector3d>* out) const {
+  out->clear();
+  if (k <= 0 || voxels_.empty() || max_dist_m <= 0) return 0;
+  const double max_d2 = max_dist_m * max_dist_m;
+  const Key c = keyOf(q);
+  // Candidates (squared distance, point), kept as a max-heap of the k best.
+  std::vector<std::pair<double, const Eigen::Vector3d*>> best;
+  best.reserve(static_cast<std::size_t>(k) + 1);
+  const auto cmp = [](const auto& a, const auto& b) { return a.first < b.first; };
+  const auto visit = [&](const Key& key) {
+    const auto it = voxels_.find(key);
+    if (it == voxels_.end()) return;
+    for (const auto& p : it->second) {
+      const double d2 = (p - q).squaredNorm();
+      if (d2 > max_d2) continue;
+      if (static_cast<int>(best.size()) < k) {
+        best.emplace_back(d2, &p);
+        std::push_heap(best.begin(), best.end(), cmp);
+      } else if (d2 < best.front().first) {
+        std::pop_heap(best.begin(), best.end(), cmp);
+        best.back() = {d2, &p};
+        std::push_heap(best.begin(), best.end(), cmp);
+      }
+    }
+  };
+  // After scanning Chebyshev rings 0..r, every unscanned point is at least r voxels away from q.
+  const int max_ring = std::max(1, static_cast<int>(std::ceil(max_dist_m * inv_voxel_)));
+  for (int r = 0; r <= max_ring; ++r) {
+    for (int dx = -r; dx <= r; ++dx)
+      for (int dy = -r; dy <= r; ++dy)
+        for (int dz = -r; dz <= r; ++dz) {
+          if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r) continue;  // shell only
+          visit(Key{c.x + dx, c.y + dy, c.z + dz});
+        }
+    if (r >= 1 && static_cast<int>(best.size()) == k) {
+      const double covered = r * voxel_m_;
+      if (best.front().first <= covered * covered) break;
+    }
+  }
+  std::sort_heap(best.begin(), best.end(), cmp);
+  out->reserve(best.size());
+  for (const auto& b : best) out->push_back(*b.second);
+  return static_cast<int>(out->size());
+}
+
+void VoxelHashMap::clear() {
+  voxels_.clear();
+  num_points_ = 0;
+}
+
+std::vector<Eigen::Vector3d> VoxelHashMap::points() const {
+  std::vector<Eigen::Vector3d> all;
+  all.reserve(num_points_);
+  for (const auto& [key, bucket] : voxels_) all.insert(all.end(), bucket.begin(), bucket.end());
+  return all;
+}
+
+}  // namespace mmlio::map

@@ -1,0 +1,74 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+#include "mmlio/map/voxel_hash_map.hpp"
+
+using mmlio::map::VoxelHashMap;
+
+namespace {
+
+std::vector<Eigen::Vector3d> randomCloud(int n, double half_extent_m, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-half_extent_m, half_extent_m);
+  std::vector<Eigen::Vector3d> pts(n);
+  for (auto& p : pts) p = Eigen::Vector3d(u(rng), u(rng), u(rng));
+  return pts;
+}
+
+}  // namespace
+
+TEST(VoxelHashMap, KnnEqualsBruteForceOnTheStoredPoints) {
+  VoxelHashMap map(0.5, 1000);  // large cap: every point is stored
+  const auto cloud = randomCloud(20000, 10.0, 1);
+  map.add(cloud);
+  ASSERT_EQ(map.size(), cloud.size());
+  const auto queries = randomCloud(200, 11.0, 2);
+  std::vector<Eigen::Vector3d> got;
+  for (const auto& q : queries) {
+    for (double max_dist : {0.4, 1.0, 2.5}) {
+      const int k = 5;
+      const int n = map.knn(q, k, max_dist, &got);
+      std::vector<double> d;
+      for (const auto& p : cloud)
+        if ((p - q).norm() <= max_dist) d.push_back((p - q).norm());
+      std::sort(d.begin(), d.end());
+      ASSERT_EQ(n, std::min<int>(k, static_cast<int>(d.size())));
+      for (int i = 0; i < n; ++i) EXPECT_NEAR((got[i] - q).norm(), d[i], 1e-12) << "rank " << i;
+    }
+  }
+}
+
+TEST(VoxelHashMap, KnnFindsNeighboursBeyondTheFirstRingWhenTheyAreTheOnlyOnes) {
+  VoxelHashMap map(0.2, 20);
+  map.add({Eigen::Vector3d(1.0, 0, 0), Eigen::Vector3d(0, 1.5, 0), Eigen::Vector3d(0, 0, 3.0)});
+  std::vector<Eigen::Vector3d> got;
+  EXPECT_EQ(map.knn(Eigen::Vector3d::Zero(), 2, 2.0, &got), 2);
+  EXPECT_TRUE(got[0].isApprox(Eigen::Vector3d(1.0, 0, 0)));
+  EXPECT_TRUE(got[1].isApprox(Eigen::Vector3d(0, 1.5, 0)));
+  EXPECT_EQ(map.knn(Eigen::Vector3d::Zero(), 5, 0.5, &got), 0);
+}
+
+TEST(VoxelHashMap, VoxelCapBoundsThePointsPerVoxel) {
+  VoxelHashMap map(1.0, 3);
+  std::vector<Eigen::Vector3d> same_voxel(10, Eigen::Vector3d(0.5, 0.5, 0.5));
+  map.add(same_voxel);
+  EXPECT_EQ(map.size(), 3u);
+  EXPECT_EQ(map.numVoxels(), 1u);
+}
+
+TEST(VoxelHashMap, RemoveFarFromKeepsOnlyPointsNearTheCentre) {
+  VoxelHashMap map(0.5, 5);
+  map.add(randomCloud(20000, 50.0, 3));
+  const std::size_t before = map.size();
+  const Eigen::Vector3d c(10, 0, 0);
+  map.removeFarFrom(c, 20.0);
+  EXPECT_LT(map.size(), before / 4);
+  EXPECT_GT(map.size(), 0u);
+  // Voxels are dropped by their first point: any kept point is within radius + one voxel diagonal.
+  for (const auto& p : map.points()) EXPECT_LE((p - c).norm(), 20.0 + std::sqrt(3.0) * 0.5);
+  EXPECT_EQ(map.points().size(), map.size());
+  map.clear();
+  EXPECT_TRUE(map.empty());
+}
