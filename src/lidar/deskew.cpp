@@ -1,0 +1,89 @@
+#include "mmlio/lidar/deskew.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "mmlio/core/so3.hpp"
+
+namespace mmlio::lidar {
+
+Eigen::Isometry3d se3Exp(const Eigen::Vector3d& v, const Eigen::Vector3d& w) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = so3::exp(w).toRotationMatrix();
+  const double a = w.norm();
+  const Eigen::Matrix3d W = so3::hat(w);
+  Eigen::Matrix3d V = Eigen::Matrix3d::Identity();
+  if (a < 1e-6) {
+    V += 0.5 * W + W * W / 6.0;
+  } else {
+    V += (1 - std::cos(a)) / (a * a) * W + (a - std::sin(a)) / (a * a * a) * W * W;
+  }
+  T.translation() = V * v;
+  return T;
+}
+
+SweepMotion::SweepMotion(std::vector<double> times_s, std::vector<Eigen::Isometry3d> T_end_t)
+    : times_s_(std::move(times_s)) {
+  if (times_s_.size() != T_end_t.size()) throw std::invalid_argument("SweepMotion: times and poses differ in size");
+  if (!std::is_sorted(times_s_.begin(), times_s_.end())) throw std::invalid_argument("SweepMotion: times not sorted");
+  q_.reserve(T_end_t.size());
+  p_.reserve(T_end_t.size());
+  for (const auto& T : T_end_t) {
+    q_.emplace_back(Eigen::Quaterniond(T.rotation()).normalized());
+    p_.push_back(T.translation());
+  }
+}
+
+SweepMotion SweepMotion::constantTwist(const Eigen::Vector3d& v_body, const Eigen::Vector3d& w_body,
+                                       double sweep_end_s) {
+  SweepMotion m;
+  m.is_twist_ = true;
+  m.v_body_ = v_body;
+  m.w_body_ = w_body;
+  m.twist_end_s_ = sweep_end_s;
+  return m;
+}
+
+Eigen::Isometry3d SweepMotion::at(double t_s) const {
+  if (is_twist_) {
+    const double dt = t_s - twist_end_s_;  // <= 0 inside the sweep
+    return se3Exp(v_body_ * dt, w_body_ * dt);
+  }
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  if (times_s_.empty()) return T;
+  std::size_t i1 = static_cast<std::size_t>(std::upper_bound(times_s_.begin(), times_s_.end(), t_s) - times_s_.begin());
+  if (i1 == 0 || i1 == times_s_.size()) {  // clamped
+    const std::size_t i = i1 == 0 ? 0 : times_s_.size() - 1;
+    T.linear() = q_[i].toRotationMatrix();
+    T.translation() = p_[i];
+    return T;
+  }
+  const std::size_t i0 = i1 - 1;
+  const double span = times_s_[i1] - times_s_[i0];
+  const double a = span > 0 ? (t_s - times_s_[i0]) / span : 0.0;
+  T.linear() = q_[i0].slerp(a, q_[i1]).toRotationMatrix();
+  T.translation() = (1 - a) * p_[i0] + a * p_[i1];
+  return T;
+}
+
+void deskewToEnd(LidarScan& scan, const Eigen::Isometry3d& T_imu_sensor, const SweepMotion& motion,
+                 double sweep_end_s) {
+  if (motion.isIdentity() || scan.points.empty()) return;
+  const Eigen::Isometry3d T_sensor_imu = T_imu_sensor.inverse();
+  const Eigen::Isometry3d T_ref_inv = motion.at(sweep_end_s).inverse();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, scan.points.size(), 4096),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                        Point& p = scan.points[i];
+                        const Eigen::Isometry3d T_end_sensor_t =
+                            T_sensor_imu * (T_ref_inv * motion.at(p.time_s)) * T_imu_sensor;
+                        p.xyz = (T_end_sensor_t * p.xyz.cast<double>()).cast<float>();
+                      }
+                    });
+}
+
+}  // namespace mmlio::lidar
