@@ -1,0 +1,79 @@
+#pragma once
+// Keyframe pose graph (the back end): odometry edges between consecutive keyframes and loop
+// edges, optimised with Ceres. The first keyframe is held fixed (it anchors the gauge).
+//
+// Poses are T_world_body. An edge a->b with measurement T_a_b has the residual
+//   r = sqrt(I) * [ R_a^T (p_b - p_a) - p_ab ;  2 vec(q_ab^-1 * q_a^-1 q_b) ]   (tangent order dp, dtheta)
+// i.e. the error of the estimated relative pose expressed in frame a (Ceres pose_graph_3d).
+// Loop edges carry a Huber loss on the whitened residual so that one wrong loop cannot pull the
+// whole graph. Core code: no I/O.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <cstddef>
+#include <vector>
+
+#include "mmlio/core/types.hpp"
+
+namespace mmlio::backend {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+struct KeyframeNode {
+  Stamp stamp_ns = 0;
+  Eigen::Isometry3d T_world_body_odom = Eigen::Isometry3d::Identity();  // pose from the odometry
+  std::vector<Eigen::Vector3d> cloud_body;  // downsampled de-skewed points, body frame (m)
+};
+
+/// Information (inverse covariance, tangent order dp, dtheta) of independent isotropic noise.
+Matrix6d isotropicInformation(double sigma_translation_m, double sigma_rotation_rad);
+
+class PoseGraph {
+ public:
+  struct Config {
+    double odom_sigma_translation_m = 0.02;  // per odometry edge, each axis
+    double odom_sigma_rotation_rad = 0.002;  // per odometry edge, each axis
+    double loop_huber = 1.0;                 // Huber scale on the whitened loop residual (sigmas)
+    int max_iterations = 50;                 // Levenberg-Marquardt iterations per optimize()
+  };
+
+  PoseGraph();  // default Config (a nested Config with initialisers cannot be a default argument in GCC)
+  explicit PoseGraph(Config cfg);
+
+  /// Appends a keyframe (stamps must not decrease) and the odometry edge to the previous one,
+  /// measured as T_prev_odom^-1 * T_odom. Its initial estimate chains that relative pose onto the
+  /// previous keyframe's current estimate, so earlier corrections carry forward. Returns its index.
+  int addKeyframe(KeyframeNode node);
+  /// Loop edge: T_from_to maps `to`'s body frame into `from`'s; information in (dp, dtheta) order.
+  void addLoop(int from, int to, const Eigen::Isometry3d& T_from_to, const Matrix6d& information);
+  /// Optimises all poses, keyframe 0 fixed. Returns false if the solver failed (estimate kept).
+  bool optimize();
+
+  std::size_t size() const { return nodes_.size(); }
+  const KeyframeNode& node(int i) const { return nodes_.at(static_cast<std::size_t>(i)); }
+  /// Current estimate of T_world_body of keyframe i (its odometry pose until optimised).
+  Eigen::Isometry3d pose(int i) const;
+  std::size_t loops() const { return loops_.size(); }
+
+  /// T_world_body of an odometry pose stamped t, corrected like the last keyframe at or before t:
+  /// pose(k) * T_world_body_odom(k)^-1 * T_world_body_odom. Identity correction before keyframe 0.
+  Eigen::Isometry3d correct(Stamp t, const Eigen::Isometry3d& T_world_body_odom) const;
+
+  const Config& config() const { return cfg_; }
+
+ private:
+  struct Edge {
+    int from, to;
+    Eigen::Isometry3d T_from_to;
+    Matrix6d sqrt_information;  // upper-triangular, r^T I r = |S r|^2
+  };
+
+  Config cfg_;
+  std::vector<KeyframeNode> nodes_;
+  std::vector<std::array<double, 7>> params_;  // {px,py,pz,qx,qy,qz,qw} per keyframe
+  std::vector<Edge> odom_edges_;
+  std::vector<Edge> loops_;
+};
+
+}  // namespace mmlio::backend
