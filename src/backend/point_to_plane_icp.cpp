@@ -1,0 +1,208 @@
+#include "mmlio/backend/point_to_plane_icp.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <nanoflann.hpp>
+#include <unordered_map>
+
+#include "mmlio/core/so3.hpp"
+
+namespace mmlio::backend {
+namespace {
+
+struct CloudAdaptor {
+  const std::vector<Eigen::Vector3d>* pts;
+  std::size_t kdtree_get_point_count() const { return pts->size(); }
+  double kdtree_get_pt(std::size_t i, std::size_t d) const { return (*pts)[i][static_cast<int>(d)]; }
+  template <class BBox>
+  bool kdtree_get_bbox(BBox&) const { return false; }
+};
+using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, CloudAdaptor>,
+                                                   CloudAdaptor, 3, std::uint32_t>;
+
+struct VoxelKey {
+  std::int64_t x, y, z;
+  bool operator==(const VoxelKey& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+struct VoxelKeyHash {
+  std::size_t operator()(const VoxelKey& k) const {
+    return static_cast<std::size_t>((k.x * 73856093) ^ (k.y * 19349669) ^ (k.z * 83492791));
+  }
+};
+
+double geometric(double a, double b, int level, int levels) {
+  if (levels <= 1) return b;
+  return a * std::pow(b / a, static_cast<double>(level) / (levels - 1));
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector3d> voxelCentroids(const std::vector<Eigen::Vector3d>& pts, double leaf_m) {
+  if (leaf_m <= 0) return pts;
+  const double inv = 1.0 / leaf_m;
+  std::unordered_map<VoxelKey, std::size_t, VoxelKeyHash> index;
+  index.reserve(pts.size());
+  std::vector<Eigen::Vector3d> sum;
+  std::vector<int> count;
+  for (const auto& p : pts) {
+    const VoxelKey k{static_cast<std::int64_t>(std::floor(p.x() * inv)), static_cast<std::int64_t>(std::floor(p.y() * inv)),
+                     static_cast<std::int64_t>(std::floor(p.z() * inv))};
+    auto [it, inserted] = index.emplace(k, sum.size());
+    if (inserted) {
+      sum.push_back(p);
+      count.push_back(1);
+    } else {
+      sum[it->second] += p;
+      ++count[it->second];
+    }
+  }
+  for (std::size_t i = 0; i < sum.size(); ++i) sum[i] /= count[i];
+  return sum;
+}
+
+struct IcpTarget::Impl {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<Eigen::Vector3d> normals;
+  std::vector<char> has_normal;
+  CloudAdaptor adaptor{nullptr};
+  std::unique_ptr<KdTree> tree;
+};
+
+IcpTarget::IcpTarget(std::vector<Eigen::Vector3d> points, int normal_neighbours, double min_patch_width_m) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.points = std::move(points);
+  m.adaptor.pts = &m.points;
+  m.tree = std::make_unique<KdTree>(3, m.adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+  m.normals.assign(m.points.size(), Eigen::Vector3d::UnitZ());
+  m.has_normal.assign(m.points.size(), 0);
+  const std::size_t k = static_cast<std::size_t>(std::max(3, normal_neighbours));
+  if (m.points.size() < k) return;
+  std::vector<std::uint32_t> idx(k);
+  std::vector<double> d2(k);
+  for (std::size_t i = 0; i < m.points.size(); ++i) {
+    const std::size_t n = m.tree->knnSearch(m.points[i].data(), k, idx.data(), d2.data());
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (std::size_t j = 0; j < n; ++j) mean += m.points[idx[j]];
+    mean /= static_cast<double>(n);
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (std::size_t j = 0; j < n; ++j) {
+      const Eigen::Vector3d d = m.points[idx[j]] - mean;
+      cov += d * d.transpose();
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+    const Eigen::Vector3d ev = es.eigenvalues();  // ascending
+    // A plane: thin (smallest << middle) and wide in its second direction too. The absolute
+    // width test matters: neighbours from one scan line (or one column of rings hitting a wall
+    // at grazing incidence) form a line whose range noise alone would pass a ratio test and give
+    // an arbitrary "normal".
+    const double width_sq = min_patch_width_m * min_patch_width_m * static_cast<double>(n);
+    if (ev(0) < 0.1 * ev(1) && ev(1) > width_sq) {
+      m.normals[i] = es.eigenvectors().col(0);
+      m.has_normal[i] = 1;
+    }
+  }
+}
+
+IcpTarget::~IcpTarget() = default;
+IcpTarget::IcpTarget(IcpTarget&&) noexcept = default;
+IcpTarget& IcpTarget::operator=(IcpTarget&&) noexcept = default;
+
+std::size_t IcpTarget::size() const { return impl_->points.size(); }
+const std::vector<Eigen::Vector3d>& IcpTarget::points() const { return impl_->points; }
+const Eigen::Vector3d& IcpTarget::normal(std::size_t i) const { return impl_->normals[i]; }
+bool IcpTarget::hasNormal(std::size_t i) const { return impl_->has_normal[i] != 0; }
+
+int IcpTarget::nearest(const Eigen::Vector3d& q, double* dist_sq) const {
+  if (impl_->points.empty()) return -1;
+  std::uint32_t idx = 0;
+  double d2 = 0;
+  impl_->tree->knnSearch(q.data(), 1, &idx, &d2);
+  if (dist_sq) *dist_sq = d2;
+  return static_cast<int>(idx);
+}
+
+IcpResult alignPointToPlane(const std::vector<Eigen::Vector3d>& source, const IcpTarget& target,
+                            const Eigen::Isometry3d& T_target_source_guess, const IcpConfig& cfg) {
+  using Matrix6d = Eigen::Matrix<double, 6, 6>;
+  using Vector6d = Eigen::Matrix<double, 6, 1>;
+  IcpResult result;
+  result.T_target_source = T_target_source_guess;
+  if (target.size() == 0 || source.empty()) return result;
+
+  Eigen::Isometry3d T = T_target_source_guess;
+  const int levels = std::max(1, cfg.levels);
+  std::vector<Eigen::Vector3d> src;
+  Matrix6d H;
+  Vector6d g;
+  int n_valid = 0;
+  double abs_sum = 0;
+  for (int level = 0; level < levels; ++level) {
+    const double gate = geometric(cfg.max_corr_coarse_m, cfg.max_corr_fine_m, level, levels);
+    src = voxelCentroids(source, geometric(cfg.voxel_coarse_m, cfg.voxel_fine_m, level, levels));
+    const double gate_sq = gate * gate;
+    for (int it = 0; it < cfg.max_iterations_per_level; ++it) {
+      H.setZero();
+      g.setZero();
+      n_valid = 0;
+      abs_sum = 0;
+      for (const auto& p : src) {
+        const Eigen::Vector3d x = T * p;
+        double d2 = 0;
+        const int j = target.nearest(x, &d2);
+        if (d2 > gate_sq || !target.hasNormal(static_cast<std::size_t>(j))) continue;
+        const Eigen::Vector3d& n = target.normal(static_cast<std::size_t>(j));
+        const double r = n.dot(x - target.points()[static_cast<std::size_t>(j)]);
+        Vector6d J;
+        J.head<3>() = n;
+        J.tail<3>() = x.cross(n);  // n^T (-hat(x)) = (x × n)^T
+        H.noalias() += J * J.transpose();
+        g.noalias() += J * r;
+        abs_sum += std::abs(r);
+        ++n_valid;
+      }
+      ++result.iterations;
+      if (n_valid < cfg.min_correspondences) return result;  // not converged
+      const Vector6d delta = (H + 1e-9 * Matrix6d::Identity()).ldlt().solve(-g);
+      Eigen::Isometry3d dT = Eigen::Isometry3d::Identity();
+      dT.linear() = so3::exp(delta.tail<3>()).toRotationMatrix();
+      dT.translation() = delta.head<3>();
+      T = dT * T;
+      if (delta.head<3>().norm() < cfg.converged_translation_m && delta.tail<3>().norm() < cfg.converged_rotation_rad)
+        break;
+    }
+  }
+  // Final statistics at the finest gate, at the final pose.
+  const double gate_sq = cfg.max_corr_fine_m * cfg.max_corr_fine_m;
+  H.setZero();
+  n_valid = 0;
+  abs_sum = 0;
+  int overlapping = 0;
+  for (const auto& p : src) {
+    const Eigen::Vector3d x = T * p;
+    double d2 = 0;
+    const int j = target.nearest(x, &d2);
+    if (d2 > gate_sq) continue;
+    ++overlapping;
+    if (!target.hasNormal(static_cast<std::size_t>(j))) continue;
+    const Eigen::Vector3d& n = target.normal(static_cast<std::size_t>(j));
+    Vector6d J;
+    J.head<3>() = n;
+    J.tail<3>() = x.cross(n);
+    H.noalias() += J * J.transpose();
+    abs_sum += std::abs(n.dot(x - target.points()[static_cast<std::size_t>(j)]));
+    ++n_valid;
+  }
+  result.T_target_source = T;
+  result.correspondences = n_valid;
+  result.overlap = src.empty() ? 0.0 : static_cast<double>(overlapping) / static_cast<double>(src.size());
+  if (n_valid < cfg.min_correspondences) return result;
+  result.converged = true;
+  result.fitness_m = abs_sum / n_valid;
+  result.hessian_normalised = H / n_valid;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(result.hessian_normalised.topLeftCorner<3, 3>());
+  result.min_translation_eigenvalue = es.eigenvalues()(0);
+  result.weakest_translation_direction = es.eigenvectors().col(0);
+  return result;
+}
+
+}  // namespace mmlio::backend

@@ -1,0 +1,58 @@
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "mmlio/backend/point_to_plane_icp.hpp"
+#include "synthetic_scene.hpp"
+
+namespace mmlio::backend {
+namespace {
+
+using testing::pose;
+constexpr double kDeg = M_PI / 180.0;
+
+double angleOf(const Eigen::Isometry3d& T) { return Eigen::AngleAxisd(T.rotation()).angle(); }
+
+TEST(PointToPlaneIcp, RecoversAKnownOffsetBetweenTwoScansOfARoom) {
+  const auto scene = testing::roomA();
+  const Eigen::Isometry3d T_world_a = pose(-1.0, 0.5, 1.0, 0.2);
+  const Eigen::Isometry3d T_a_b = pose(0.6, -0.4, 0.05, 6 * kDeg, 1 * kDeg, -0.5 * kDeg);
+  const auto cloud_a = testing::scan(scene, T_world_a, 1);
+  const auto cloud_b = testing::scan(scene, T_world_a * T_a_b, 2);
+  const IcpTarget target(voxelCentroids(cloud_a, 0.1));
+  const IcpResult r = alignPointToPlane(cloud_b, target, Eigen::Isometry3d::Identity());
+  ASSERT_TRUE(r.converged);
+  const Eigen::Isometry3d err = T_a_b.inverse() * r.T_target_source;
+  std::printf("ICP error %.4f m %.4f deg, fitness %.4f m, overlap %.3f, min eig %.3f, %d iterations\n",
+              err.translation().norm(), angleOf(err) / kDeg, r.fitness_m, r.overlap, r.min_translation_eigenvalue,
+              r.iterations);
+  EXPECT_LT(err.translation().norm(), 0.01);
+  EXPECT_LT(angleOf(err), 0.1 * kDeg);
+  EXPECT_LT(r.fitness_m, 0.03);
+  EXPECT_GT(r.overlap, 0.8);
+  EXPECT_GT(r.min_translation_eigenvalue, 0.02);  // a room constrains every direction
+}
+
+TEST(PointToPlaneIcp, FlagsAFeaturelessCorridorAsDegenerateAlongItsAxis) {
+  const auto scene = testing::corridor(200.0, 4.0, /*doors=*/false);
+  const auto cloud_a = testing::scan(scene, pose(0, 0, 1.0, 0), 3, 0.01, 20.0);
+  const auto cloud_b = testing::scan(scene, pose(0.5, 0.1, 1.0, 2 * kDeg), 4, 0.01, 20.0);
+  const IcpTarget target(voxelCentroids(cloud_a, 0.1));
+  const IcpResult r = alignPointToPlane(cloud_b, target, Eigen::Isometry3d::Identity());
+  ASSERT_TRUE(r.converged);
+  std::printf("corridor: min eig %.4f along (%.2f %.2f %.2f)\n", r.min_translation_eigenvalue,
+              r.weakest_translation_direction.x(), r.weakest_translation_direction.y(), r.weakest_translation_direction.z());
+  EXPECT_LT(r.min_translation_eigenvalue, 0.03);  // the room above: ~0.1
+  EXPECT_GT(std::abs(r.weakest_translation_direction.x()), 0.99);
+}
+
+TEST(PointToPlaneIcp, VoxelCentroidsKeepsOnePointPerVoxel) {
+  const std::vector<Eigen::Vector3d> pts{{0.1, 0.1, 0.1}, {0.3, 0.3, 0.3}, {1.5, 0.2, 0.2}};
+  const auto out = voxelCentroids(pts, 1.0);
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_TRUE(out[0].isApprox(Eigen::Vector3d(0.2, 0.2, 0.2)));
+  EXPECT_TRUE(out[1].isApprox(pts[2]));
+}
+
+}  // namespace
+}  // namespace mmlio::backend
