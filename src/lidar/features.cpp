@@ -1,0 +1,167 @@
+#include "mmlio/lidar/features.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace mmlio::lidar {
+namespace {
+
+enum class Label : unsigned char { kNone, kEdge, kBreak, kPlane };
+
+struct Candidate {
+  Label label = Label::kNone;
+  double curvature = 0.0;
+};
+
+// Eigen decomposition of the scatter of pts[0..n): ascending eigenvalues, matching eigenvectors.
+void scatter(const Eigen::Vector3d* pts, int n, Eigen::Vector3d* evals, Eigen::Matrix3d* evecs) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int k = 0; k < n; ++k) mean += pts[k];
+  mean /= n;
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (int k = 0; k < n; ++k) {
+    const Eigen::Vector3d d = pts[k] - mean;
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+  es.computeDirect(cov / n);
+  *evals = es.eigenvalues();
+  if (evecs) *evecs = es.eigenvectors();
+}
+
+// Features of one ordered scan line; appends the picked points' indices (into P) to edges / planes.
+void processLine(const std::vector<Eigen::Vector3d>& P, int K, int stride, const FeatureConfig& cfg,
+                 std::vector<std::size_t>* edges, std::vector<std::size_t>* planes) {
+  const int n = static_cast<int>(P.size());
+  const int span = K * stride;
+  if (n < 2 * span + 1) return;
+  std::vector<double> R(P.size());
+  for (int j = 0; j < n; ++j) R[j] = P[j].norm();
+  // gaps_before[j] = number of breaks between consecutive points among 0..j.
+  std::vector<int> gaps_before(P.size(), 0);
+  std::vector<char> gap(P.size(), 0);  // gap[j]: break between j and j+1
+  for (int j = 0; j + 1 < n; ++j) {
+    gap[j] = (P[j + 1] - P[j]).norm() > cfg.continuity_jump_m;
+    gaps_before[j + 1] = gaps_before[j] + gap[j];
+  }
+  const auto continuous = [&](int a, int b) { return gaps_before[b] - gaps_before[a] == 0; };  // a <= b
+
+  std::vector<Candidate> cand(P.size());
+  const double min_bend_cos = std::cos(cfg.edge_min_bend_deg * M_PI / 180.0);
+  std::vector<Eigen::Vector3d> buf(static_cast<std::size_t>(2 * K + 1));
+  for (int i = 0; i < n; ++i) {
+    const int lo = i - span, hi = i + span;
+    if (lo >= 0 && hi < n && continuous(lo, hi)) {
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      double sq = 0.0;
+      for (int k = 1; k <= K; ++k) {
+        const Eigen::Vector3d a = P[i - k * stride] - P[i], b = P[i + k * stride] - P[i];
+        sum += a + b;
+        sq += a.squaredNorm() + b.squaredNorm();
+      }
+      if (sq <= 0.0) continue;
+      const double c = sum.squaredNorm() / sq;
+      cand[i].curvature = c;
+      if (c > cfg.edge_threshold) {
+        // Line edge only if the two halves are lines meeting at an angle (not one noisy point).
+        Eigen::Vector3d ev;
+        Eigen::Matrix3d evec;
+        for (int k = 0; k <= K; ++k) buf[k] = P[i - k * stride];
+        scatter(buf.data(), K + 1, &ev, &evec);
+        const Eigen::Vector3d dl = evec.col(2);
+        for (int k = 0; k <= K; ++k) buf[k] = P[i + k * stride];
+        scatter(buf.data(), K + 1, &ev, &evec);
+        const Eigen::Vector3d dr = evec.col(2);
+        if (std::abs(dl.dot(dr)) < min_bend_cos) cand[i].label = Label::kEdge;
+      } else if (c < cfg.plane_threshold) {
+        Eigen::Vector3d ev;
+        for (int k = -K; k <= K; ++k) buf[k + K] = P[i + k * stride];
+        scatter(buf.data(), 2 * K + 1, &ev, nullptr);
+        if (ev(2) > 0 && ev(1) < cfg.plane_max_flatness * ev(2)) cand[i].label = Label::kPlane;
+      }
+      continue;
+    }
+    // Break points: the near side of a depth jump, with a continuous neighbourhood on its own side.
+    const bool jump_right = i + 1 < n && gap[i] && R[i + 1] - R[i] > cfg.continuity_jump_m;
+    const bool jump_left = i >= 1 && gap[i - 1] && R[i - 1] - R[i] > cfg.continuity_jump_m;
+    if ((jump_right && lo >= 0 && continuous(lo, i)) || (jump_left && hi < n && continuous(i, hi))) {
+      cand[i].label = Label::kBreak;
+      cand[i].curvature = std::numeric_limits<double>::infinity();
+    }
+  }
+
+  // LOAM-style spreading: per sector, sharpest edges first with neighbour suppression, flattest planes.
+  const int sectors = std::max(1, cfg.sectors_per_line);
+  std::vector<char> suppressed(P.size(), 0);
+  std::vector<int> order;
+  for (int s = 0; s < sectors; ++s) {
+    const int begin = n * s / sectors, end = n * (s + 1) / sectors;
+    order.clear();
+    for (int i = begin; i < end; ++i)
+      if (cand[i].label == Label::kEdge || cand[i].label == Label::kBreak) order.push_back(i);
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return cand[a].curvature > cand[b].curvature; });
+    int picked = 0;
+    for (int i : order) {
+      if (picked >= cfg.max_edges_per_sector) break;
+      if (suppressed[i]) continue;
+      edges->push_back(static_cast<std::size_t>(i));
+      ++picked;
+      for (int k = std::max(0, i - span); k <= std::min(n - 1, i + span); ++k) suppressed[k] = 1;
+    }
+    order.clear();
+    for (int i = begin; i < end; ++i)
+      if (cand[i].label == Label::kPlane && !suppressed[i]) order.push_back(i);
+    if (static_cast<int>(order.size()) > cfg.max_planes_per_sector) {
+      std::nth_element(order.begin(), order.begin() + cfg.max_planes_per_sector, order.end(),
+                       [&](int a, int b) { return cand[a].curvature < cand[b].curvature; });
+      order.resize(static_cast<std::size_t>(std::max(0, cfg.max_planes_per_sector)));
+      std::sort(order.begin(), order.end());
+    }
+    for (int i : order) planes->push_back(static_cast<std::size_t>(i));
+  }
+  std::sort(edges->begin(), edges->end());
+}
+
+}  // namespace
+
+FeatureCloud extractFeatures(const LidarScan& scan, LidarKind kind, int num_rings, const FeatureConfig& cfg) {
+  FeatureCloud out;
+  out.input_points = scan.points.size();
+  const auto lines = scanLines(scan, kind, num_rings, cfg);
+  const int K = std::max(1, cfg.neighbours);
+  const int stride = kind == LidarKind::kSolidState ? std::max(1, cfg.solid_state_stride) : 1;
+
+  struct LineResult {
+    std::vector<std::size_t> edges, planes;  // indices into scan.points
+  };
+  std::vector<LineResult> results(lines.size());
+  tbb::parallel_for(std::size_t{0}, lines.size(), [&](std::size_t l) {
+    const auto& ids = lines[l];
+    // Positions along the line, consecutive duplicates (dual returns) dropped.
+    std::vector<Eigen::Vector3d> P;
+    std::vector<std::size_t> id_of;
+    P.reserve(ids.size());
+    id_of.reserve(ids.size());
+    for (std::size_t id : ids) {
+      const Eigen::Vector3d p = scan.points[id].xyz.cast<double>();
+      if (!P.empty() && (p - P.back()).squaredNorm() < 1e-6) continue;
+      P.push_back(p);
+      id_of.push_back(id);
+    }
+    std::vector<std::size_t> e, pl;
+    processLine(P, K, stride, cfg, &e, &pl);
+    for (std::size_t i : e) results[l].edges.push_back(id_of[i]);
+    for (std::size_t i : pl) results[l].planes.push_back(id_of[i]);
+  });
+  for (const auto& r : results) {
+    for (std::size_t id : r.edges) out.edges.push_back(scan.points[id]);
+    for (std::size_t id : r.planes) out.planes.push_back(scan.points[id]);
+  }
+  return out;
+}
+
+}  // namespace mmlio::lidar
