@@ -1,0 +1,81 @@
+#pragma once
+// Loop detection and verification over a PoseGraph's keyframes.
+//
+// Candidates: (1) past keyframes within search_radius_m of the query in the current estimate and at
+// least min_time_gap_s older, nearest first; (2) the best Scan-Context match among the old-enough
+// keyframes (for when drift has moved the estimate away from the true place), its prior being the
+// descriptor's yaw at zero offset. Each is verified by point-to-plane ICP of the query cloud against
+// a submap of keyframes around the candidate, and accepted only if
+//   fitness <= max_fitness_m, overlap >= min_overlap, the geometry constrains every horizontal
+//   direction (smallest normalised Hessian eigenvalue), a distance candidate's correction from its
+//   prior stays within a bound, and the match is unique: ICP restarted from priors shifted along the
+//   scene's horizontal principal axes must not find a distinct, equally good alignment. The last test
+//   is what rejects a repetitive corridor, where every door period aligns as well as the true one.
+
+#include <Eigen/Geometry>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "mmlio/backend/point_to_plane_icp.hpp"
+#include "mmlio/backend/pose_graph.hpp"
+#include "mmlio/backend/scan_context.hpp"
+
+namespace mmlio::backend {
+
+struct LoopResult {
+  bool accepted = false;
+  int query = -1, match = -1;                                      // keyframe indices
+  Eigen::Isometry3d T_match_query = Eigen::Isometry3d::Identity();  // for PoseGraph::addLoop(match, query, ...)
+  Matrix6d information = Matrix6d::Identity();                     // of T_match_query (dp, dtheta)
+  double fitness_m = 0, overlap = 0;
+  int candidates_tried = 0;
+  std::string reason;  // why accepted / why the last candidate was rejected
+};
+
+class LoopCloser {
+ public:
+  struct Config {
+    double search_radius_m = 10.0;      // distance candidates: within this in the current estimate ...
+    double min_time_gap_s = 20.0;       // ... and at least this much older than the query
+    double max_fitness_m = 0.1;         // accept: mean |point-to-plane residual| at most this
+    double min_overlap = 0.5;           // accept: fraction of query points near the submap (0..1)
+    double icp_max_corr_m = 1.0;        // ICP correspondence gate at the coarsest level
+    int submap_keyframes = 5;           // keyframes around the candidate merged into the target
+    int max_distance_candidates = 3;    // nearest distance candidates verified per query
+    bool use_descriptor = true;         // also try the best Scan-Context match
+    double max_descriptor_distance = 0.2;  // Scan-Context distance (0..1) below which it is a candidate
+    double submap_voxel_m = 0.1;        // target downsampling
+    double min_translation_eigenvalue = 0.03;  // reject below: degenerate direction (see IcpResult)
+    double max_correction_m = 5.0;      // distance candidates: ICP may move the prior at most this ...
+    double max_correction_deg = 30.0;   // ... and rotate it at most this
+    std::vector<double> ambiguity_shifts_m{1.5, 3.0, 4.5};  // restarts at +-these along both principal axes
+    double ambiguity_min_separation_m = 1.0;  // a restart ending this far from the solution is distinct
+    double ambiguity_fitness_ratio = 1.5;     // distinct and fitness within this factor ...
+    double ambiguity_overlap_ratio = 0.8;     // ... and overlap within this fraction: ambiguous
+    double loop_sigma_translation_m = 0.05;   // information of an accepted loop
+    double loop_sigma_rotation_rad = 0.005;
+    ScanContextConfig descriptor;
+  };
+
+  LoopCloser();
+  explicit LoopCloser(Config cfg);
+
+  /// Looks for a loop from keyframe `query` to an older keyframe of `graph`. Caches descriptors by
+  /// keyframe index, so one LoopCloser serves one graph (not thread-safe).
+  LoopResult detect(const PoseGraph& graph, int query) const;
+
+  const Config& config() const { return cfg_; }
+
+ private:
+  struct Verification;
+  Verification verify(const PoseGraph& graph, int query, int match, const Eigen::Isometry3d& prior,
+                      bool bound_correction) const;
+  const ScanContext& descriptor(const PoseGraph& graph, int i) const;
+
+  Config cfg_;
+  IcpConfig icp_;
+  mutable std::vector<std::optional<ScanContext>> descriptors_;
+};
+
+}  // namespace mmlio::backend

@@ -1,0 +1,207 @@
+#include "mmlio/backend/loop_closer.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <sstream>
+
+#include "mmlio/core/log.hpp"
+
+namespace mmlio::backend {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+std::string fmt(double v) {
+  std::ostringstream os;
+  os.precision(3);
+  os << v;
+  return os.str();
+}
+
+/// The two horizontal principal axes of the points (largest spread first), unit, z = 0.
+std::array<Eigen::Vector3d, 2> horizontalAxes(const std::vector<Eigen::Vector3d>& pts, const Eigen::Isometry3d& T) {
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& p : pts) mean += (T * p).head<2>();
+  mean /= std::max<std::size_t>(1, pts.size());
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (const auto& p : pts) {
+    const Eigen::Vector2d d = (T * p).head<2>() - mean;
+    cov += d * d.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(cov);
+  const Eigen::Vector2d major = es.eigenvectors().col(1), minor = es.eigenvectors().col(0);
+  return {Eigen::Vector3d(major.x(), major.y(), 0), Eigen::Vector3d(minor.x(), minor.y(), 0)};
+}
+
+}  // namespace
+
+struct LoopCloser::Verification {
+  bool accepted = false;
+  IcpResult icp;
+  std::string reason;
+};
+
+LoopCloser::LoopCloser() : LoopCloser(Config{}) {}
+
+LoopCloser::LoopCloser(Config cfg) : cfg_(std::move(cfg)) {
+  icp_.max_corr_coarse_m = cfg_.icp_max_corr_m;
+  icp_.max_corr_fine_m = std::min(cfg_.icp_max_corr_m, 0.25);
+  icp_.voxel_fine_m = cfg_.submap_voxel_m;
+}
+
+const ScanContext& LoopCloser::descriptor(const PoseGraph& graph, int i) const {
+  if (descriptors_.size() < graph.size()) descriptors_.resize(graph.size());
+  auto& slot = descriptors_[static_cast<std::size_t>(i)];
+  if (!slot) slot = makeScanContext(graph.node(i).cloud_body, cfg_.descriptor);
+  return *slot;
+}
+
+LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, int match,
+                                            const Eigen::Isometry3d& prior, bool bound_correction) const {
+  Verification v;
+  // Target: keyframes around the match, in the match's body frame, all old enough.
+  const Stamp latest = graph.node(query).stamp_ns - fromSec(cfg_.min_time_gap_s);
+  const int half = std::max(0, cfg_.submap_keyframes / 2);
+  const Eigen::Isometry3d T_match_world = graph.pose(match).inverse();
+  std::vector<Eigen::Vector3d> submap;
+  for (int i = std::max(0, match - half); i <= std::min(query - 1, match + half); ++i) {
+    if (graph.node(i).stamp_ns > latest) continue;
+    const Eigen::Isometry3d T_match_i = T_match_world * graph.pose(i);
+    for (const auto& p : graph.node(i).cloud_body) submap.push_back(T_match_i * p);
+  }
+  const IcpTarget target(voxelCentroids(submap, cfg_.submap_voxel_m));
+  const auto& source = graph.node(query).cloud_body;
+
+  v.icp = alignPointToPlane(source, target, prior, icp_);
+  const IcpResult& r = v.icp;
+  if (!r.converged) {
+    v.reason = "ICP did not converge (" + std::to_string(r.correspondences) + " correspondences)";
+    return v;
+  }
+  if (r.fitness_m > cfg_.max_fitness_m) {
+    v.reason = "fitness " + fmt(r.fitness_m) + " m > " + fmt(cfg_.max_fitness_m);
+    return v;
+  }
+  if (r.overlap < cfg_.min_overlap) {
+    v.reason = "overlap " + fmt(r.overlap) + " < " + fmt(cfg_.min_overlap);
+    return v;
+  }
+  if (r.min_translation_eigenvalue < cfg_.min_translation_eigenvalue) {
+    v.reason = "degenerate geometry (translation eigenvalue " + fmt(r.min_translation_eigenvalue) + ")";
+    return v;
+  }
+  if (bound_correction) {
+    const Eigen::Isometry3d correction = prior.inverse() * r.T_target_source;
+    const double angle_deg = Eigen::AngleAxisd(correction.rotation()).angle() * kRadToDeg;
+    if (correction.translation().norm() > cfg_.max_correction_m || angle_deg > cfg_.max_correction_deg) {
+      v.reason = "correction " + fmt(correction.translation().norm()) + " m / " + fmt(angle_deg) +
+                 " deg from the prior exceeds the bound";
+      return v;
+    }
+  }
+  // Uniqueness: restart from the solution shifted along the horizontal principal axes.
+  IcpConfig restart = icp_;
+  restart.max_iterations_per_level = 10;
+  const auto axes = horizontalAxes(voxelCentroids(source, 0.5), r.T_target_source);
+  for (const auto& axis : axes)
+    for (double shift : cfg_.ambiguity_shifts_m)
+      for (double sign : {-1.0, 1.0}) {
+        Eigen::Isometry3d guess = r.T_target_source;
+        guess.pretranslate(sign * shift * axis);
+        const IcpResult alt = alignPointToPlane(source, target, guess, restart);
+        if (!alt.converged) continue;
+        const double separation = (alt.T_target_source.translation() - r.T_target_source.translation()).norm();
+        if (separation < cfg_.ambiguity_min_separation_m) continue;
+        if (alt.fitness_m <= cfg_.ambiguity_fitness_ratio * r.fitness_m &&
+            alt.overlap >= cfg_.ambiguity_overlap_ratio * r.overlap && alt.fitness_m <= cfg_.max_fitness_m &&
+            alt.overlap >= cfg_.min_overlap) {
+          v.reason = "ambiguous: an alignment " + fmt(separation) + " m away fits as well (fitness " +
+                     fmt(alt.fitness_m) + " vs " + fmt(r.fitness_m) + ", overlap " + fmt(alt.overlap) + " vs " +
+                     fmt(r.overlap) + ")";
+          return v;
+        }
+      }
+  v.accepted = true;
+  v.reason = "accepted: fitness " + fmt(r.fitness_m) + " m, overlap " + fmt(r.overlap);
+  return v;
+}
+
+LoopResult LoopCloser::detect(const PoseGraph& graph, int query) const {
+  LoopResult result;
+  result.query = query;
+  if (query < 0 || query >= static_cast<int>(graph.size())) {
+    result.reason = "no such keyframe";
+    return result;
+  }
+  if (graph.node(query).cloud_body.empty()) {
+    result.reason = "query keyframe has no points";
+    return result;
+  }
+  const Stamp latest = graph.node(query).stamp_ns - fromSec(cfg_.min_time_gap_s);
+  const Eigen::Isometry3d T_world_query = graph.pose(query);
+
+  struct Candidate {
+    int index;
+    Eigen::Isometry3d prior;  // T_match_query
+    bool by_distance;
+  };
+  std::vector<Candidate> candidates;
+  {
+    std::vector<std::pair<double, int>> near;
+    for (int i = 0; i < query; ++i) {
+      if (graph.node(i).stamp_ns > latest || graph.node(i).cloud_body.empty()) continue;
+      const double d = (graph.pose(i).translation() - T_world_query.translation()).norm();
+      if (d <= cfg_.search_radius_m) near.emplace_back(d, i);
+    }
+    std::sort(near.begin(), near.end());
+    for (std::size_t k = 0; k < near.size() && static_cast<int>(k) < cfg_.max_distance_candidates; ++k)
+      candidates.push_back({near[k].second, graph.pose(near[k].second).inverse() * T_world_query, true});
+  }
+  if (cfg_.use_descriptor) {
+    const ScanContext& q = descriptor(graph, query);
+    int best = -1;
+    ScanContextMatch best_match;
+    for (int i = 0; i < query; ++i) {
+      if (graph.node(i).stamp_ns > latest || graph.node(i).cloud_body.empty()) continue;
+      const ScanContext& c = descriptor(graph, i);
+      // Cheap rotation-invariant pre-check before the shift search.
+      if ((c.ring_key - q.ring_key).norm() > 0.5 * q.ring_key.norm() + 1e-9) continue;
+      const ScanContextMatch m = compareScanContexts(q, c);
+      if (m.distance < best_match.distance) {
+        best_match = m;
+        best = i;
+      }
+    }
+    const bool already = std::any_of(candidates.begin(), candidates.end(), [&](const Candidate& c) { return c.index == best; });
+    if (best >= 0 && !already && best_match.distance <= cfg_.max_descriptor_distance) {
+      Eigen::Isometry3d prior = Eigen::Isometry3d::Identity();
+      prior.linear() = Eigen::AngleAxisd(best_match.yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      candidates.push_back({best, prior, false});
+    }
+  }
+  if (candidates.empty()) {
+    result.reason = "no candidate";
+    return result;
+  }
+  for (const Candidate& c : candidates) {
+    ++result.candidates_tried;
+    const Verification v = verify(graph, query, c.index, c.prior, c.by_distance);
+    result.match = c.index;
+    result.T_match_query = v.icp.T_target_source;
+    result.fitness_m = v.icp.fitness_m;
+    result.overlap = v.icp.overlap;
+    result.reason = std::string(c.by_distance ? "distance" : "descriptor") + " candidate " + std::to_string(c.index) +
+                    ": " + v.reason;
+    log::debug("loop ", query, " -> ", result.reason);
+    if (v.accepted) {
+      result.accepted = true;
+      result.information = isotropicInformation(cfg_.loop_sigma_translation_m, cfg_.loop_sigma_rotation_rad);
+      return result;
+    }
+  }
+  return result;
+}
+
+}  // namespace mmlio::backend

@@ -1,0 +1,122 @@
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "mmlio/backend/loop_closer.hpp"
+#include "synthetic_scene.hpp"
+
+namespace mmlio::backend {
+namespace {
+
+using testing::pose;
+constexpr double kDeg = M_PI / 180.0;
+
+double angleOf(const Eigen::Isometry3d& T) { return Eigen::AngleAxisd(T.rotation()).angle(); }
+
+KeyframeNode keyframe(double t_s, const Eigen::Isometry3d& T_world_body_odom, std::vector<Eigen::Vector3d> cloud) {
+  KeyframeNode n;
+  n.stamp_ns = fromSec(t_s);
+  n.T_world_body_odom = T_world_body_odom;
+  n.cloud_body = voxelCentroids(cloud, 0.1);
+  return n;
+}
+
+void report(const char* what, const LoopResult& r) {
+  std::printf("%s: %s (tried %d)\n", what, r.reason.c_str(), r.candidates_tried);
+}
+
+TEST(LoopCloser, AcceptsATrueRevisitAndRecoversTheRelativePoseDespiteDrift) {
+  const auto scene = testing::roomA();
+  const Eigen::Isometry3d T0 = pose(-2.0, 1.0, 1.0, 0.3);
+  const Eigen::Isometry3d T1 = T0 * pose(0.8, -0.5, 0.0, 15 * kDeg);
+  const Eigen::Isometry3d drift = pose(0.4, 0.3, 0.02, 3 * kDeg);
+  PoseGraph graph;
+  graph.addKeyframe(keyframe(0.0, T0, testing::scan(scene, T0, 10)));
+  graph.addKeyframe(keyframe(5.0, T0 * pose(3, 0, 0, 0), {}));  // an intermediate keyframe without points
+  const int q = graph.addKeyframe(keyframe(30.0, T1 * drift, testing::scan(scene, T1, 11)));
+
+  const LoopCloser closer(LoopCloser::Config{});
+  const LoopResult r = closer.detect(graph, q);
+  report("true revisit", r);
+  ASSERT_TRUE(r.accepted) << r.reason;
+  EXPECT_EQ(r.match, 0);
+  EXPECT_EQ(r.query, q);
+  const Eigen::Isometry3d err = (T0.inverse() * T1).inverse() * r.T_match_query;
+  std::printf("  error %.4f m %.4f deg, fitness %.4f m overlap %.3f\n", err.translation().norm(), angleOf(err) / kDeg,
+              r.fitness_m, r.overlap);
+  EXPECT_LT(err.translation().norm(), 0.02);
+  EXPECT_LT(angleOf(err), 0.2 * kDeg);
+  EXPECT_LE(r.fitness_m, 0.1);
+  EXPECT_GE(r.overlap, 0.5);
+}
+
+TEST(LoopCloser, IgnoresKeyframesYoungerThanTheTimeGap) {
+  const auto scene = testing::roomA();
+  const Eigen::Isometry3d T0 = pose(-2.0, 1.0, 1.0, 0.3);
+  PoseGraph graph;
+  graph.addKeyframe(keyframe(0.0, T0, testing::scan(scene, T0, 10)));
+  const int q = graph.addKeyframe(keyframe(10.0, T0, testing::scan(scene, T0, 11)));
+  const LoopResult r = LoopCloser(LoopCloser::Config{}).detect(graph, q);
+  EXPECT_FALSE(r.accepted);
+  EXPECT_EQ(r.candidates_tried, 0);
+}
+
+TEST(LoopCloser, RejectsACandidateInADifferentRoom) {
+  // The estimate puts the query 1 m from keyframe 0, but it was scanned in another room.
+  const Eigen::Isometry3d T0 = pose(-2.0, 1.0, 1.0, 0.3);
+  PoseGraph graph;
+  graph.addKeyframe(keyframe(0.0, T0, testing::scan(testing::roomA(), T0, 20)));
+  const int q = graph.addKeyframe(keyframe(40.0, T0 * pose(1.0, 0, 0, 0), testing::scan(testing::roomB(), pose(0.5, 0.3, 1.0, 0.2), 21)));
+  const LoopResult r = LoopCloser(LoopCloser::Config{}).detect(graph, q);
+  report("different room", r);
+  EXPECT_FALSE(r.accepted);
+  EXPECT_GE(r.candidates_tried, 1);
+}
+
+TEST(LoopCloser, RejectsARepetitiveCorridorShiftedAlongItsAxis) {
+  // Door recesses every 4 m. The query is truly 8 m further down the corridor than keyframe 0,
+  // but drift puts it 1 m away: ICP snaps to a door period and fits perfectly, wrongly.
+  const auto scene = testing::corridor(120.0, 4.0, /*doors=*/true);
+  const Eigen::Isometry3d T0 = pose(0.0, 0.0, 1.0, 0.0);
+  const Eigen::Isometry3d T1_true = pose(8.0, 0.1, 1.0, 2 * kDeg);
+  const Eigen::Isometry3d T1_estimate = pose(1.0, 0.1, 1.0, 2 * kDeg);
+  PoseGraph graph;
+  graph.addKeyframe(keyframe(0.0, T0, testing::scan(scene, T0, 30, 0.01, 20.0)));
+  const int q = graph.addKeyframe(keyframe(40.0, T1_estimate, testing::scan(scene, T1_true, 31, 0.01, 20.0)));
+  const LoopResult r = LoopCloser(LoopCloser::Config{}).detect(graph, q);
+  report("corridor", r);
+  EXPECT_FALSE(r.accepted);
+  EXPECT_GE(r.candidates_tried, 1);
+}
+
+TEST(LoopCloser, FindsARevisitByItsDescriptorWhenDriftIsLarge) {
+  // The estimate is 30 m off (no distance candidate); the Scan Context finds the place and its yaw.
+  const auto scene = testing::roomA();
+  const Eigen::Isometry3d T0 = pose(-2.0, 1.0, 1.0, 0.3);
+  const Eigen::Isometry3d T1 = T0 * pose(0.5, 0.3, 0.0, 40 * kDeg);
+  PoseGraph graph;
+  graph.addKeyframe(keyframe(0.0, T0, testing::scan(scene, T0, 40)));
+  const int q = graph.addKeyframe(keyframe(60.0, pose(30.0, 0, 1.0, 1.0), testing::scan(scene, T1, 41)));
+  const LoopResult r = LoopCloser(LoopCloser::Config{}).detect(graph, q);
+  report("descriptor", r);
+  ASSERT_TRUE(r.accepted) << r.reason;
+  EXPECT_EQ(r.match, 0);
+  const Eigen::Isometry3d err = (T0.inverse() * T1).inverse() * r.T_match_query;
+  EXPECT_LT(err.translation().norm(), 0.02);
+  EXPECT_LT(angleOf(err), 0.2 * kDeg);
+}
+
+TEST(ScanContext, SameSceneRotatedMatchesWithItsYaw) {
+  const auto scene = testing::roomA();
+  const Eigen::Isometry3d T0 = pose(-2.0, 1.0, 1.0, 0.3);
+  const auto a = makeScanContext(testing::scan(scene, T0, 50));
+  const auto b = makeScanContext(testing::scan(scene, T0 * pose(0, 0, 0, 60 * kDeg), 51));
+  const auto other = makeScanContext(testing::scan(testing::roomB(), pose(0, 0, 1.0, 0), 52));
+  const ScanContextMatch m = compareScanContexts(b, a);
+  EXPECT_LT(m.distance, 0.1);
+  EXPECT_NEAR(m.yaw_rad, 60 * kDeg, 6.5 * kDeg);  // one sector
+  EXPECT_GT(compareScanContexts(other, a).distance, m.distance + 0.1);
+}
+
+}  // namespace
+}  // namespace mmlio::backend
