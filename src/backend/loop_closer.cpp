@@ -102,7 +102,12 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
     }
   }
   // Uniqueness: restart from the solution shifted along the horizontal principal axes.
+  // Restarts run coarse (cheap); one that ends at a distinct place is refined at full resolution
+  // before its fitness and overlap are compared with the solution's.
   IcpConfig restart = icp_;
+  restart.levels = 2;
+  restart.voxel_fine_m = std::max(icp_.voxel_fine_m, 0.3);
+  restart.max_corr_fine_m = std::max(icp_.max_corr_fine_m, 0.5);
   restart.max_iterations_per_level = 10;
   const auto axes = horizontalAxes(voxelCentroids(source, 0.5), r.T_target_source);
   for (const auto& axis : axes)
@@ -110,7 +115,16 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
       for (double sign : {-1.0, 1.0}) {
         Eigen::Isometry3d guess = r.T_target_source;
         guess.pretranslate(sign * shift * axis);
-        const IcpResult alt = alignPointToPlane(source, target, guess, restart);
+        const IcpResult coarse = alignPointToPlane(source, target, guess, restart);
+        if (!coarse.converged) continue;
+        if ((coarse.T_target_source.translation() - r.T_target_source.translation()).norm() <
+            cfg_.ambiguity_min_separation_m)
+          continue;
+        IcpConfig fine = icp_;
+        fine.levels = 1;
+        fine.max_corr_coarse_m = icp_.max_corr_fine_m;
+        fine.voxel_coarse_m = icp_.voxel_fine_m;
+        const IcpResult alt = alignPointToPlane(source, target, coarse.T_target_source, fine);
         if (!alt.converged) continue;
         const double separation = (alt.T_target_source.translation() - r.T_target_source.translation()).norm();
         if (separation < cfg_.ambiguity_min_separation_m) continue;
