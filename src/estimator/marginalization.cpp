@@ -11,6 +11,13 @@ namespace mmlio::estimator {
 
 int tangentSize(int global_size) { return global_size == 7 ? 6 : global_size; }
 
+std::unordered_map<long, double*> addressShift(const std::vector<double*>& from, const std::vector<double*>& to) {
+  if (from.size() != to.size()) throw std::invalid_argument("addressShift: from and to differ in length");
+  std::unordered_map<long, double*> shift;
+  for (std::size_t i = 0; i < from.size(); ++i) shift[reinterpret_cast<long>(from[i])] = to[i];
+  return shift;
+}
+
 namespace {
 
 /// Triggs correction of a robust loss (the scheme Ceres applies internally): afterwards

@@ -35,6 +35,10 @@ namespace mmlio::estimator {
 /// Tangent size of a parameter block of the given global size (7 -> 6, otherwise unchanged).
 int tangentSize(int global_size);
 
+/// The `shift` map for keptBlockAddresses() after a window slide: from[i] -> to[i]
+/// (e.g. from = {&pose[1][0], ..., &pose[N][0]}, to = {&pose[0][0], ..., &pose[N-1][0]}).
+std::unordered_map<long, double*> addressShift(const std::vector<double*>& from, const std::vector<double*>& to);
+
 struct ResidualBlockInfo {
   ceres::CostFunction* cost = nullptr;   // owned by MarginalizationInfo once added
   ceres::LossFunction* loss = nullptr;   // may be nullptr; owned once added (shared pointers ok)
@@ -51,6 +55,8 @@ class MarginalizationInfo {
   MarginalizationInfo& operator=(const MarginalizationInfo&) = delete;
 
   /// Takes ownership of info.cost and info.loss (each distinct pointer is deleted once).
+  /// Add only residual blocks that touch at least one dropped block (a block dropped in one
+  /// residual is dropped everywhere); the others stay in the problem and must not be counted twice.
   void addResidualBlock(ResidualBlockInfo info);
   /// Evaluates all residual blocks and their Jacobians and copies every block's current values.
   void preMarginalize();
