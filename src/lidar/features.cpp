@@ -10,6 +10,8 @@
 namespace mmlio::lidar {
 namespace {
 
+constexpr double kMaxArmCos = 0.5;  // arms of a line edge are more than 60 deg apart
+
 enum class Label : unsigned char { kNone, kEdge, kBreak, kPlane };
 
 struct Candidate {
@@ -33,33 +35,62 @@ void scatter(const Eigen::Vector3d* pts, int n, Eigen::Vector3d* evals, Eigen::M
   if (evecs) *evecs = es.eigenvectors();
 }
 
-// Features of one ordered scan line; appends the picked points' indices (into P) to edges / planes.
-void processLine(const std::vector<Eigen::Vector3d>& P, int K, int stride, const FeatureConfig& cfg,
+// Neighbours are taken every `stride` points, the stride chosen per point so that neighbours are
+// at least min_neighbour_spacing_m apart: on dense lines (a close wall, Livox) range noise would
+// otherwise dominate the curvature. The centre is the mean of the points between its two nearest
+// neighbours, which damps its own noise without moving a corner.
+void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConfig& cfg,
                  std::vector<std::size_t>* edges, std::vector<std::size_t>* planes) {
   const int n = static_cast<int>(P.size());
-  const int span = K * stride;
-  if (n < 2 * span + 1) return;
+  if (n < 2 * K + 1) return;
   std::vector<double> R(P.size());
   for (int j = 0; j < n; ++j) R[j] = P[j].norm();
   // gaps_before[j] = number of breaks between consecutive points among 0..j.
   std::vector<int> gaps_before(P.size(), 0);
   std::vector<char> gap(P.size(), 0);  // gap[j]: break between j and j+1
+  // Angular step of the line from the bearings (unit rays), which range noise does not inflate.
+  std::vector<double> step_rad;
+  step_rad.reserve(P.size());
   for (int j = 0; j + 1 < n; ++j) {
-    gap[j] = (P[j + 1] - P[j]).norm() > cfg.continuity_jump_m;
+    const double d = (P[j + 1] - P[j]).norm();
+    gap[j] = d > cfg.continuity_jump_m;
     gaps_before[j + 1] = gaps_before[j] + gap[j];
+    if (!gap[j] && R[j] > 0 && R[j + 1] > 0) step_rad.push_back((P[j + 1] / R[j + 1] - P[j] / R[j]).norm());
   }
+  // A line that turns back on itself (the Livox pattern at the edge of its view) breaks there too.
+  for (int j = 1; j + 1 < n; ++j) {
+    if (gap[j] || R[j - 1] <= 0 || R[j] <= 0 || R[j + 1] <= 0) continue;
+    const Eigen::Vector3d u0 = P[j - 1] / R[j - 1], u1 = P[j] / R[j], u2 = P[j + 1] / R[j + 1];
+    if ((u2 - u1).dot(u1 - u0) < 0) gap[j] = 1;
+  }
+  for (int j = 0; j + 1 < n; ++j) gaps_before[j + 1] = gaps_before[j] + gap[j];
+  if (step_rad.empty()) return;
+  std::nth_element(step_rad.begin(), step_rad.begin() + static_cast<std::ptrdiff_t>(step_rad.size() / 2), step_rad.end());
+  const double line_step_rad = std::max(step_rad[step_rad.size() / 2], 1e-6);
+  const int max_stride = std::max(1, cfg.max_stride);
+  const auto strideAt = [&](int i) {
+    const double s = std::ceil(cfg.min_neighbour_spacing_m / (line_step_rad * R[i]));
+    return static_cast<int>(std::clamp(s, 1.0, static_cast<double>(max_stride)));
+  };
   const auto continuous = [&](int a, int b) { return gaps_before[b] - gaps_before[a] == 0; };  // a <= b
 
   std::vector<Candidate> cand(P.size());
+  std::vector<int> span_of(P.size(), K);
   const double min_bend_cos = std::cos(cfg.edge_min_bend_deg * M_PI / 180.0);
   std::vector<Eigen::Vector3d> buf(static_cast<std::size_t>(2 * K + 1));
   for (int i = 0; i < n; ++i) {
+    const int stride = strideAt(i);
+    const int span = K * stride;
+    span_of[i] = span;
     const int lo = i - span, hi = i + span;
     if (lo >= 0 && hi < n && continuous(lo, hi)) {
+      Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+      for (int k = i - stride + 1; k <= i + stride - 1; ++k) centre += P[k];
+      centre /= (2 * stride - 1);
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();
       double sq = 0.0;
       for (int k = 1; k <= K; ++k) {
-        const Eigen::Vector3d a = P[i - k * stride] - P[i], b = P[i + k * stride] - P[i];
+        const Eigen::Vector3d a = P[i - k * stride] - centre, b = P[i + k * stride] - centre;
         sum += a + b;
         sq += a.squaredNorm() + b.squaredNorm();
       }
@@ -76,7 +107,10 @@ void processLine(const std::vector<Eigen::Vector3d>& P, int K, int stride, const
         for (int k = 0; k <= K; ++k) buf[k] = P[i + k * stride];
         scatter(buf.data(), K + 1, &ev, &evec);
         const Eigen::Vector3d dr = evec.col(2);
-        if (std::abs(dl.dot(dr)) < min_bend_cos) cand[i].label = Label::kEdge;
+        // The arms must not fold back onto each other (a Livox line turning round, a thin spike).
+        const Eigen::Vector3d arm_l = P[lo] - centre, arm_r = P[hi] - centre;
+        const bool folded = arm_l.dot(arm_r) > kMaxArmCos * arm_l.norm() * arm_r.norm();
+        if (!folded && std::abs(dl.dot(dr)) < min_bend_cos) cand[i].label = Label::kEdge;
       } else if (c < cfg.plane_threshold) {
         Eigen::Vector3d ev;
         for (int k = -K; k <= K; ++k) buf[k + K] = P[i + k * stride];
@@ -110,7 +144,7 @@ void processLine(const std::vector<Eigen::Vector3d>& P, int K, int stride, const
       if (suppressed[i]) continue;
       edges->push_back(static_cast<std::size_t>(i));
       ++picked;
-      for (int k = std::max(0, i - span); k <= std::min(n - 1, i + span); ++k) suppressed[k] = 1;
+      for (int k = std::max(0, i - span_of[i]); k <= std::min(n - 1, i + span_of[i]); ++k) suppressed[k] = 1;
     }
     order.clear();
     for (int i = begin; i < end; ++i)
@@ -133,7 +167,6 @@ FeatureCloud extractFeatures(const LidarScan& scan, LidarKind kind, int num_ring
   out.input_points = scan.points.size();
   const auto lines = scanLines(scan, kind, num_rings, cfg);
   const int K = std::max(1, cfg.neighbours);
-  const int stride = kind == LidarKind::kSolidState ? std::max(1, cfg.solid_state_stride) : 1;
 
   struct LineResult {
     std::vector<std::size_t> edges, planes;  // indices into scan.points
@@ -153,7 +186,7 @@ FeatureCloud extractFeatures(const LidarScan& scan, LidarKind kind, int num_ring
       id_of.push_back(id);
     }
     std::vector<std::size_t> e, pl;
-    processLine(P, K, stride, cfg, &e, &pl);
+    processLine(P, K, cfg, &e, &pl);
     for (std::size_t i : e) results[l].edges.push_back(id_of[i]);
     for (std::size_t i : pl) results[l].planes.push_back(id_of[i]);
   });

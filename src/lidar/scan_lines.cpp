@@ -21,20 +21,19 @@ double elevationDeg(const Point& p) {
   return std::atan2(v.z(), v.head<2>().norm()) * 180.0 / M_PI;
 }
 
-// Orders a line by time when the points carry times, else by azimuth (spinning) / input order.
-void orderLine(const LidarScan& scan, bool by_azimuth_fallback, std::vector<std::size_t>* line) {
-  if (line->empty()) return;
-  float tmin = scan.points[line->front()].time_s, tmax = tmin;
-  for (std::size_t i : *line) {
-    tmin = std::min(tmin, scan.points[i].time_s);
-    tmax = std::max(tmax, scan.points[i].time_s);
-  }
-  if (tmax > tmin) {
+// Spinning rings are ordered by azimuth (drivers' per-point times are not always monotonic along a
+// ring, e.g. dual-return packets); Livox lines by time (the scan pattern doubles back in azimuth).
+void orderLine(const LidarScan& scan, bool spinning, std::vector<std::size_t>* line) {
+  if (spinning) {
+    std::vector<std::pair<double, std::size_t>> keyed;
+    keyed.reserve(line->size());
+    for (std::size_t i : *line) keyed.emplace_back(azimuth(scan.points[i]), i);
+    std::stable_sort(keyed.begin(), keyed.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (std::size_t k = 0; k < keyed.size(); ++k) (*line)[k] = keyed[k].second;
+  } else {
     std::stable_sort(line->begin(), line->end(),
                      [&](std::size_t a, std::size_t b) { return scan.points[a].time_s < scan.points[b].time_s; });
-  } else if (by_azimuth_fallback) {
-    std::stable_sort(line->begin(), line->end(),
-                     [&](std::size_t a, std::size_t b) { return azimuth(scan.points[a]) < azimuth(scan.points[b]); });
   }
 }
 

@@ -31,9 +31,10 @@ struct FeatureConfig {
   double min_range_m = 0.5;         // closer returns are ignored
   int range_image_cols = 1800;      // azimuth bins of the range image used when rings are missing
   // Beyond the shared config:
-  int solid_state_stride = 2;       // Livox lines: neighbours are every n-th point (spacing vs range noise)
+  double min_neighbour_spacing_m = 0.05;  // neighbours are every n-th point so they are this far apart (noise)
+  int max_stride = 8;               // ... but at most every max_stride-th point
   double edge_min_bend_deg = 30.0;  // angle between the two half-neighbourhood lines for a line edge
-  double plane_max_flatness = 0.01; // lambda_2 / lambda_1 of the neighbourhood for a plane point
+  double plane_max_flatness = 0.05; // lambda_2 / lambda_1 of the neighbourhood for a plane point
   int sectors_per_line = 6;         // each line is split into this many sectors for even spreading
   int max_edges_per_sector = 20;    // LOAM-style cap on edges per sector
   int max_planes_per_sector = 200;  // cap on planes per sector (the flattest are kept)

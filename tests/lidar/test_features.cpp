@@ -1,0 +1,196 @@
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "mmlio/io/pcd_io.hpp"
+#include "mmlio/lidar/bad_frame.hpp"
+#include "mmlio/lidar/features.hpp"
+#include "synthetic_scans.hpp"
+
+using namespace mmlio;
+using namespace mmlio::lidar;
+using mmlio::synth::BoxRoom;
+
+namespace {
+
+// Near one of the room's 12 edges: within tol of the bounds on two axes.
+bool nearBoxEdge(const BoxRoom& room, const Point& p, double tol_m) {
+  int close = 0;
+  for (int a = 0; a < 3; ++a)
+    close += std::abs(p.xyz[a] - room.lo[a]) < tol_m || std::abs(p.xyz[a] - room.hi[a]) < tol_m;
+  return close >= 2;
+}
+
+struct Split {
+  int at_edge = 0, elsewhere = 0;
+};
+Split splitByEdge(const BoxRoom& room, const std::vector<Point>& pts, double tol_m) {
+  Split s;
+  for (const auto& p : pts) (nearBoxEdge(room, p, tol_m) ? s.at_edge : s.elsewhere)++;
+  return s;
+}
+
+}  // namespace
+
+TEST(Features, RingScanOfABoxRoomGivesCornerEdgesAndWallPlanes) {
+  const BoxRoom room;
+  const LidarScan scan = synth::vlp16Room(room, 0.01);
+  const FeatureCloud f = extractFeatures(scan, LidarKind::kSpinning, 16, FeatureConfig{});
+  EXPECT_EQ(f.input_points, scan.points.size());
+  const Split e = splitByEdge(room, f.edges, 0.2);
+  std::cout << "vlp16 synthetic: edges at room edges " << e.at_edge << " elsewhere " << e.elsewhere << " planes "
+            << f.planes.size() << "\n";
+  // Every ring crosses the four vertical corners: about 4 x 16 edges there, hardly any elsewhere.
+  EXPECT_GE(e.at_edge, 56);
+  EXPECT_LE(e.elsewhere, e.at_edge / 10);
+  const Split p = splitByEdge(room, f.planes, 0.05);
+  EXPECT_GT(p.elsewhere, 5000);
+  EXPECT_LE(p.at_edge, p.elsewhere / 100);
+}
+
+TEST(Features, RangeImageRowsReplaceMissingRings) {
+  const BoxRoom room;
+  LidarScan scan = synth::vlp16Room(room, 0.01);
+  FeatureConfig cfg;
+  EXPECT_EQ(scanLines(scan, LidarKind::kSpinning, 1, cfg).size(), 16u);  // elevation clusters = lasers
+  for (auto& p : scan.points) p.ring = 0;
+  const FeatureCloud f = extractFeatures(scan, LidarKind::kSpinning, 1, cfg);
+  const Split e = splitByEdge(room, f.edges, 0.2);
+  EXPECT_GE(e.at_edge, 56);
+  EXPECT_LE(e.elsewhere, e.at_edge / 10);
+  EXPECT_GT(f.planes.size(), 5000u);
+}
+
+TEST(Features, LivoxLikeLineScanGivesCornerEdgesAndWallPlanes) {
+  const BoxRoom room;
+  // Looking at the corner (6, 5): the view holds two walls, the floor and their edges.
+  const LidarScan scan = synth::livoxRoom(room, std::atan2(5.0, 6.0), 0.02);
+  const FeatureCloud f = extractFeatures(scan, LidarKind::kSolidState, 6, FeatureConfig{});
+  const Split e = splitByEdge(room, f.edges, 0.3);
+  std::cout << "livox synthetic: edges at room edges " << e.at_edge << " elsewhere " << e.elsewhere << " planes "
+            << f.planes.size() << "\n";
+  EXPECT_GE(e.at_edge, 6 * 4);  // 6 lines x 4 passes cross the vertical corner
+  EXPECT_LE(e.elsewhere, e.at_edge / 5);  // 2 cm range noise, as a Horizon
+  EXPECT_GT(f.planes.size(), 2000u);
+  const Split p = splitByEdge(room, f.planes, 0.05);
+  EXPECT_LE(p.at_edge, p.elsewhere / 50);
+}
+
+TEST(Features, DepthJumpMakesTheNearSideABreakPointEdge) {
+  // One line: a wall at 5 m, then (nearer) a wall at 3 m; 0.2 deg steps.
+  LidarScan scan;
+  for (int i = 0; i < 400; ++i) {
+    const double az = (-40.0 + 0.2 * i) * M_PI / 180;
+    const double x = i < 200 ? 5.0 : 3.0;
+    Point p;
+    p.xyz = Eigen::Vector3f(static_cast<float>(x), static_cast<float>(x * std::tan(az)), 0.f);
+    p.time_s = static_cast<float>(i * 1e-4);
+    p.ring = 1;
+    scan.points.push_back(p);
+  }
+  const FeatureCloud f = extractFeatures(scan, LidarKind::kSpinning, 2, FeatureConfig{});
+  ASSERT_EQ(f.edges.size(), 1u);
+  EXPECT_FLOAT_EQ(f.edges[0].xyz.x(), 3.f);  // near side (index 200)
+  EXPECT_NEAR(f.edges[0].time_s, 200e-4, 1e-7);
+  for (const auto& p : f.planes) EXPECT_GT(std::abs(p.time_s - 0.02f), 5.5e-4f) << "no plane at the jump";
+}
+
+TEST(BadFrame, WallOnlyFrameIsBadAndAFrameWithCornersIsNot) {
+  // Facing the long wall of an 8 m wide hall head-on: a single plane fills the view.
+  synth::BoxRoom hall;
+  hall.lo = Eigen::Vector3d(-4, -30, -1.5);
+  hall.hi = Eigen::Vector3d(4, 30, 2.5);
+  const FeatureConfig fc;
+  BadFrameConfig bc;
+  const FeatureCloud wall = extractFeatures(synth::livoxRoom(hall, 0.0, 0.02), LidarKind::kSolidState, 6, fc);
+  const BadFrameResult wall_result = checkSolidStateFrame(wall, bc);
+  EXPECT_TRUE(wall_result.bad);
+  EXPECT_LT(wall_result.counted_edges, 10);
+  // Facing a room corner: one vertical corner and the floor edges. The synthetic frame is small
+  // (24k points, 4 line passes) so tau_e is scaled down with it.
+  const BoxRoom room;
+  const FeatureCloud corner =
+      extractFeatures(synth::livoxRoom(room, std::atan2(5.0, 6.0), 0.02), LidarKind::kSolidState, 6, fc);
+  bc.min_edge_points = 20;
+  EXPECT_FALSE(checkSolidStateFrame(corner, bc).bad);
+  EXPECT_TRUE(checkSolidStateFrame(wall, bc).bad);
+  BadFrameConfig off = bc;
+  off.enabled = false;
+  EXPECT_FALSE(checkSolidStateFrame(wall, off).bad);
+  // Range gate: edges within 2 m are not counted.
+  FeatureCloud near;
+  near.edges.resize(500);
+  for (auto& p : near.edges) p.xyz = Eigen::Vector3f(1.5f, 0, 0);
+  EXPECT_EQ(checkSolidStateFrame(near, BadFrameConfig{}).counted_edges, 0);
+  EXPECT_TRUE(checkSolidStateFrame(near, BadFrameConfig{}).bad);
+}
+
+// ---- real data ----
+
+TEST(FeaturesRealData, Vlp16RotationGivesFewerEdgesThanPlanesWithAndWithoutRings) {
+  const std::string path = std::string(MMLIO_SHARED_DATA_DIR) + "/vlp16-nebula/1673400472138016708.pcd";
+  const io::PcdCloud cloud = io::readPcdFields(path);
+  LidarScan scan;
+  const auto& x = cloud.column("x");
+  const auto& y = cloud.column("y");
+  const auto& z = cloud.column("z");
+  const auto& ch = cloud.column("channel");
+  const auto& t = cloud.column("time_stamp");
+  const auto& in = cloud.column("intensity");
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    Point p;
+    p.xyz = Eigen::Vector3f(float(x[i]), float(y[i]), float(z[i]));
+    p.ring = static_cast<std::uint16_t>(ch[i]);
+    p.time_s = static_cast<float>(t[i] * 1e-9);
+    p.intensity = static_cast<float>(in[i]);
+    scan.points.push_back(p);
+  }
+  const FeatureCloud f = extractFeatures(scan, LidarKind::kSpinning, 16, FeatureConfig{});
+  std::cout << "VLP-16 real: " << scan.points.size() << " points, " << f.edges.size() << " edges, " << f.planes.size()
+            << " planes\n";
+  EXPECT_GT(f.edges.size(), 50u);
+  EXPECT_GT(f.planes.size(), 1000u);
+  EXPECT_LT(f.edges.size(), f.planes.size());
+  for (auto& p : scan.points) p.ring = 0;
+  const FeatureCloud g = extractFeatures(scan, LidarKind::kSpinning, 1, FeatureConfig{});
+  std::cout << "VLP-16 real, range image: " << g.edges.size() << " edges, " << g.planes.size() << " planes\n";
+  EXPECT_EQ(scanLines(scan, LidarKind::kSpinning, 1, FeatureConfig{}).size(), 15u);  // ring 0 (-15 deg) is empty
+  EXPECT_GT(g.edges.size(), 50u);
+  EXPECT_GT(g.planes.size(), 500u);
+  EXPECT_LT(g.edges.size(), g.planes.size());
+}
+
+TEST(FeaturesRealData, LivoxFrameGivesFewerEdgesThanPlanes) {
+  const std::string path = std::string(MMLIO_SHARED_DATA_DIR) + "/livox-frame-livox-detection/test_data.csv";
+  std::ifstream file(path);
+  ASSERT_TRUE(file.good()) << path;
+  LidarScan scan;
+  const Eigen::Vector3f origin(-0.09f, 0.43f, 0.15f);
+  std::string row;
+  std::size_t index = 0, rows = 0;
+  while (std::getline(file, row)) {
+    std::stringstream ss(row);
+    float v[4];
+    char comma;
+    if (!(ss >> v[0] >> comma >> v[1] >> comma >> v[2] >> comma >> v[3])) continue;
+    const std::size_t k = rows++;
+    if (v[3] == 0.f && (Eigen::Vector3f(v[0], v[1], v[2]) - origin).norm() < 0.05f) continue;  // no return
+    Point p;
+    p.xyz = Eigen::Vector3f(v[0], v[1], v[2]) - origin;
+    p.intensity = v[3];
+    p.ring = static_cast<std::uint16_t>(k % 6);
+    p.time_s = static_cast<float>(0.1 * k / 21000.0);
+    scan.points.push_back(p);
+    ++index;
+  }
+  ASSERT_GT(scan.points.size(), 10000u);
+  const FeatureCloud f = extractFeatures(scan, LidarKind::kSolidState, 6, FeatureConfig{});
+  std::cout << "Livox real: " << scan.points.size() << " points, " << f.edges.size() << " edges, " << f.planes.size()
+            << " planes\n";
+  EXPECT_GT(f.edges.size(), 20u);
+  EXPECT_GT(f.planes.size(), 500u);
+  EXPECT_LT(f.edges.size(), f.planes.size());
+  // A road scene with structure beyond 2 m is a good frame for the paper's tau_e = 100.
+  EXPECT_FALSE(checkSolidStateFrame(f, BadFrameConfig{}).bad);
+}
