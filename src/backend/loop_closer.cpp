@@ -120,6 +120,8 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
         if ((coarse.T_target_source.translation() - r.T_target_source.translation()).norm() <
             cfg_.ambiguity_min_separation_m)
           continue;
+        // The coarse overlap (wider gate) bounds the fine one from above, roughly: skip hopeless ones.
+        if (coarse.overlap < cfg_.ambiguity_overlap_ratio * r.overlap) continue;
         IcpConfig fine = icp_;
         fine.levels = 1;
         fine.max_corr_coarse_m = icp_.max_corr_fine_m;
