@@ -136,6 +136,31 @@ TEST(Marginalization, LinearPriorOfX0GivesTheFullProblemsEstimateOfTheRest) {
     for (int i = 0; i < kSizes[k]; ++i) EXPECT_NEAR(x[k][i], x_full[k][i], 1e-6) << "block " << k;
 }
 
+TEST(Marginalization, DroppedBlockWithAnUnobservableDirectionStillGivesTheFullEstimate) {
+  // No factor sees x0 along v (a gauge direction): H_mm is singular and its pseudo-inverse
+  // (eigenvalues below the floor zeroed) must still give the exact marginal.
+  LinearProblem lp(kSizes, kTouches, 9);
+  const Eigen::Vector3d v = Eigen::Vector3d(1, 2, -1).normalized();
+  for (auto& f : lp.factors)
+    for (std::size_t k = 0; k < f.blocks.size(); ++k)
+      if (f.blocks[k] == 0) f.A[k] = f.A[k] * (Eigen::Matrix3d::Identity() - v * v.transpose());
+  const auto x_full = fullSolution(lp);
+
+  auto x = randomValues(kSizes, 13, 1.0);
+  auto px = pointers(x);
+  auto info = std::make_shared<MarginalizationInfo>();
+  for (int f : {0, 1, 2}) info->addResidualBlock({lp.cost(f), nullptr, lp.addresses(f, px), {0}});
+  info->preMarginalize();
+  info->marginalize();
+  ASSERT_TRUE(info->valid());
+  ceres::Problem problem;
+  problem.AddResidualBlock(new MarginalizationFactor(info), nullptr, info->keptBlockAddresses({}));
+  for (int f : {3, 4, 5, 6, 7}) problem.AddResidualBlock(lp.cost(f), nullptr, lp.addresses(f, px));
+  solve(problem);
+  for (int k : {1, 2, 3})
+    for (int i = 0; i < kSizes[k]; ++i) EXPECT_NEAR(x[k][i], x_full[k][i], 1e-6) << "block " << k;
+}
+
 TEST(Marginalization, TwoWindowSlidesWithMovedStorageStillGiveTheFullEstimate) {
   const LinearProblem lp(kSizes, kTouches, 2);
   const auto x_full = fullSolution(lp);
