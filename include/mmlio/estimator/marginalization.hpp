@@ -1,15 +1,18 @@
 #pragma once
 // Schur-complement marginalisation prior for the sliding window (paper: D_prior, after VINS-Mono).
 //
-// Usage per window slide:
+// Usage per window slide (window arrays pose[i][7], sb[i][9]; drop the oldest, i = 0):
 //   auto info = std::make_shared<MarginalizationInfo>();
-//   info->addResidualBlock({prev_prior_factor, nullptr, prev_info->keptBlockAddresses({}), {i..}});
-//   info->addResidualBlock({new PointToPlaneFactor(...), loss, {pose0}, {0}});   // every factor
-//   info->addResidualBlock({imu_factor, nullptr, {pose0, sb0, pose1, sb1}, {0, 1}});  // touching
-//   info->preMarginalize();   // evaluates at the current values      // a dropped block
+//   if (prior)   // the previous prior, on the blocks it was added to the problem with
+//     info->addResidualBlock({new MarginalizationFactor(prior), nullptr, prior_blocks,
+//                             /* indices of pose[0], sb[0] within prior_blocks */ {...}});
+//   info->addResidualBlock({new PointToPlaneFactor(...), new ceres::HuberLoss(s), {pose[0]}, {0}});
+//   info->addResidualBlock({imu_factor_0_1, nullptr, {pose[0], sb[0], pose[1], sb[1]}, {0, 1}});
+//   info->preMarginalize();   // evaluates at the current values
 //   info->marginalize();
-//   ... slide the window (copy state arrays), then
-//   problem.AddResidualBlock(new MarginalizationFactor(info), nullptr, info->keptBlockAddresses(shift));
+//   // slide: copy pose[i+1] -> pose[i], sb[i+1] -> sb[i]
+//   prior_blocks = info->keptBlockAddresses(addressShift({pose[1], sb[1], ...}, {pose[0], sb[0], ...}));
+//   prior = info;   // next problem: AddResidualBlock(new MarginalizationFactor(prior), nullptr, prior_blocks)
 //
 // Linearisation: every residual block is evaluated once (robust losses applied with the Triggs
 // correction, as Ceres does), H = sum J^T J and g = sum J^T r are assembled in the tangent space,
