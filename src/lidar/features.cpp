@@ -16,6 +16,7 @@ enum class Label : unsigned char { kNone, kEdge, kBreak, kPlane };
 
 struct Candidate {
   Label label = Label::kNone;
+  int stride = 1;
   double curvature = 0.0;
 };
 
@@ -35,7 +36,28 @@ void scatter(const Eigen::Vector3d* pts, int n, Eigen::Vector3d* evals, Eigen::M
   if (evecs) *evecs = es.eigenvectors();
 }
 
-// Neighbours are taken every `stride` points, the stride chosen per point so that neighbours are
+// (lambda_2 + lambda_3) / lambda_1 of the scatter of the 2K+1 strided neighbours of i, with the
+// principal axis taken as the chord between the two ends (exact enough for the near-straight runs
+// this is asked about, and much cheaper than an eigen decomposition).
+double straightness(const std::vector<Eigen::Vector3d>& P, int i, int K, int stride) {
+  const Eigen::Vector3d chord = P[i + K * stride] - P[i - K * stride];
+  const double len = chord.norm();
+  if (len <= 0) return std::numeric_limits<double>::infinity();
+  const Eigen::Vector3d d = chord / len;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int k = -K; k <= K; ++k) mean += P[i + k * stride];
+  mean /= (2 * K + 1);
+  double along = 0, across = 0;
+  for (int k = -K; k <= K; ++k) {
+    const Eigen::Vector3d v = P[i + k * stride] - mean;
+    const double a = v.dot(d);
+    along += a * a;
+    across += v.squaredNorm() - a * a;
+  }
+  return along > 0 ? across / along : std::numeric_limits<double>::infinity();
+}
+
+// Features of one ordered scan line. Neighbours are taken every `stride` points, the stride chosen per point so that neighbours are
 // at least min_neighbour_spacing_m apart: on dense lines (a close wall, Livox) range noise would
 // otherwise dominate the curvature. The centre is the mean of the points between its two nearest
 // neighbours, which damps its own noise without moving a corner.
@@ -112,10 +134,8 @@ void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConf
         const bool folded = arm_l.dot(arm_r) > kMaxArmCos * arm_l.norm() * arm_r.norm();
         if (!folded && std::abs(dl.dot(dr)) < min_bend_cos) cand[i].label = Label::kEdge;
       } else if (c < cfg.plane_threshold) {
-        Eigen::Vector3d ev;
-        for (int k = -K; k <= K; ++k) buf[k + K] = P[i + k * stride];
-        scatter(buf.data(), 2 * K + 1, &ev, nullptr);
-        if (ev(2) > 0 && ev(1) < cfg.plane_max_flatness * ev(2)) cand[i].label = Label::kPlane;
+        cand[i].label = Label::kPlane;  // flatness is checked only for the points picked below
+        cand[i].stride = stride;
       }
       continue;
     }
@@ -146,16 +166,19 @@ void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConf
       ++picked;
       for (int k = std::max(0, i - span_of[i]); k <= std::min(n - 1, i + span_of[i]); ++k) suppressed[k] = 1;
     }
+    // Planes: flattest first; the neighbourhood must be a straight run (scatter eigenvalues).
     order.clear();
     for (int i = begin; i < end; ++i)
       if (cand[i].label == Label::kPlane && !suppressed[i]) order.push_back(i);
-    if (static_cast<int>(order.size()) > cfg.max_planes_per_sector) {
-      std::nth_element(order.begin(), order.begin() + cfg.max_planes_per_sector, order.end(),
-                       [&](int a, int b) { return cand[a].curvature < cand[b].curvature; });
-      order.resize(static_cast<std::size_t>(std::max(0, cfg.max_planes_per_sector)));
-      std::sort(order.begin(), order.end());
+    std::sort(order.begin(), order.end(), [&](int a, int b) {
+      return cand[a].curvature < cand[b].curvature || (cand[a].curvature == cand[b].curvature && a < b);
+    });
+    const std::size_t first_plane = planes->size();
+    for (int i : order) {
+      if (static_cast<int>(planes->size() - first_plane) >= cfg.max_planes_per_sector) break;
+      if (straightness(P, i, K, cand[i].stride) < cfg.plane_max_flatness) planes->push_back(static_cast<std::size_t>(i));
     }
-    for (int i : order) planes->push_back(static_cast<std::size_t>(i));
+    std::sort(planes->begin() + static_cast<std::ptrdiff_t>(first_plane), planes->end());
   }
   std::sort(edges->begin(), edges->end());
 }

@@ -1,0 +1,118 @@
+// LiDAR front-end and local-map benchmarks on synthetic sweeps of the box room used by the lidar
+// tests (BENCHMARK_MAIN lives in bench_main.cpp).
+#include <benchmark/benchmark.h>
+
+#include <random>
+
+#include "../tests/lidar/synthetic_scans.hpp"
+#include "mmlio/lidar/deskew.hpp"
+#include "mmlio/lidar/features.hpp"
+#include "mmlio/lidar/voxel_filter.hpp"
+#include "mmlio/map/voxel_hash_map.hpp"
+
+namespace {
+
+using namespace mmlio;
+
+// VLP-16-like sweep: 16 rings x 1800 columns = 28,800 points, 1 cm range noise.
+void BM_FeaturesVlp16Sweep(benchmark::State& state) {
+  const LidarScan scan = synth::vlp16Room(synth::BoxRoom{}, 0.01);
+  const lidar::FeatureConfig cfg;
+  std::size_t edges = 0, planes = 0;
+  for (auto _ : state) {
+    const auto f = lidar::extractFeatures(scan, LidarKind::kSpinning, 16, cfg);
+    edges = f.edges.size();
+    planes = f.planes.size();
+    benchmark::DoNotOptimize(f.edges.data());
+  }
+  state.counters["points"] = static_cast<double>(scan.points.size());
+  state.counters["edges"] = static_cast<double>(edges);
+  state.counters["planes"] = static_cast<double>(planes);
+}
+BENCHMARK(BM_FeaturesVlp16Sweep)->Unit(benchmark::kMillisecond);
+
+// Same sweep without ring numbers: range-image path.
+void BM_FeaturesVlp16RangeImage(benchmark::State& state) {
+  LidarScan scan = synth::vlp16Room(synth::BoxRoom{}, 0.01);
+  for (auto& p : scan.points) p.ring = 0;
+  const lidar::FeatureConfig cfg;
+  for (auto _ : state) benchmark::DoNotOptimize(lidar::extractFeatures(scan, LidarKind::kSpinning, 1, cfg).edges.data());
+}
+BENCHMARK(BM_FeaturesVlp16RangeImage)->Unit(benchmark::kMillisecond);
+
+// Livox-Horizon-like frame: 6 lines x 4000 points = 24,000 points, 2 cm range noise.
+void BM_FeaturesLivoxFrame(benchmark::State& state) {
+  const LidarScan scan = synth::livoxRoom(synth::BoxRoom{}, std::atan2(5.0, 6.0), 0.02);
+  const lidar::FeatureConfig cfg;
+  std::size_t edges = 0, planes = 0;
+  for (auto _ : state) {
+    const auto f = lidar::extractFeatures(scan, LidarKind::kSolidState, 6, cfg);
+    edges = f.edges.size();
+    planes = f.planes.size();
+    benchmark::DoNotOptimize(f.edges.data());
+  }
+  state.counters["points"] = static_cast<double>(scan.points.size());
+  state.counters["edges"] = static_cast<double>(edges);
+  state.counters["planes"] = static_cast<double>(planes);
+}
+BENCHMARK(BM_FeaturesLivoxFrame)->Unit(benchmark::kMillisecond);
+
+void BM_DeskewVlp16Sweep(benchmark::State& state) {
+  const LidarScan scan = synth::vlp16Room(synth::BoxRoom{}, 0.01);
+  const auto motion = lidar::SweepMotion::constantTwist({1.0, 0, 0}, {0, 0, M_PI / 2}, 0.1);
+  for (auto _ : state) {
+    state.PauseTiming();
+    LidarScan s = scan;
+    state.ResumeTiming();
+    lidar::deskewToEnd(s, Eigen::Isometry3d::Identity(), motion, 0.1);
+    benchmark::DoNotOptimize(s.points.data());
+  }
+}
+BENCHMARK(BM_DeskewVlp16Sweep)->Unit(benchmark::kMillisecond);
+
+void BM_VoxelDownsample20cm(benchmark::State& state) {
+  const LidarScan scan = synth::vlp16Room(synth::BoxRoom{}, 0.01);
+  for (auto _ : state) benchmark::DoNotOptimize(lidar::voxelDownsample(scan.points, 0.2).data());
+}
+BENCHMARK(BM_VoxelDownsample20cm)->Unit(benchmark::kMillisecond);
+
+// Local map of ~200k points (0.2 m voxels, 20 per voxel); 5-NN within 1 m, per query.
+void BM_VoxelHashMapKnn(benchmark::State& state) {
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> u(-20.0, 20.0), h(-1.5, 2.5);
+  std::vector<Eigen::Vector3d> pts;
+  // Points on a set of walls and a floor: a map-like surface distribution.
+  for (int i = 0; i < 200000; ++i) {
+    const int kind = i % 4;
+    if (kind == 0) pts.emplace_back(u(rng), u(rng), -1.5);
+    else if (kind == 1) pts.emplace_back(std::round(u(rng) / 5) * 5, u(rng), h(rng));
+    else pts.emplace_back(u(rng), std::round(u(rng) / 5) * 5, h(rng));
+  }
+  map::VoxelHashMap m(0.2, 20);
+  m.add(pts);
+  std::vector<Eigen::Vector3d> queries(4096);
+  for (std::size_t k = 0; k < queries.size(); ++k) {
+    queries[k] = pts[(k * 7919) % pts.size()] + Eigen::Vector3d(0.03, -0.02, 0.05);
+  }
+  std::vector<Eigen::Vector3d> out;
+  std::size_t q = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(m.knn(queries[q++ % queries.size()], 5, 1.0, &out));
+  }
+  state.counters["map_points"] = static_cast<double>(m.size());
+}
+BENCHMARK(BM_VoxelHashMapKnn)->Unit(benchmark::kMicrosecond);
+
+void BM_VoxelHashMapAdd(benchmark::State& state) {
+  const LidarScan scan = synth::vlp16Room(synth::BoxRoom{}, 0.01);
+  std::vector<Eigen::Vector3d> pts;
+  for (const auto& p : scan.points) pts.push_back(p.xyz.cast<double>());
+  for (auto _ : state) {
+    map::VoxelHashMap m(0.2, 20);
+    m.add(pts);
+    benchmark::DoNotOptimize(m.size());
+  }
+}
+BENCHMARK(BM_VoxelHashMapAdd)->Unit(benchmark::kMillisecond);
+
+}  // namespace
