@@ -67,17 +67,24 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
     }
   };
   // After scanning Chebyshev rings 0..r, every unscanned point is at least r voxels away from q.
-  const int max_ring = std::max(1, static_cast<int>(std::ceil(max_dist_m * inv_voxel_)));
-  for (int r = 0; r <= max_ring; ++r) {
-    for (int dx = -r; dx <= r; ++dx)
-      for (int dy = -r; dy <= r; ++dy)
-        for (int dz = -r; dz <= r; ++dz) {
-          if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r) continue;  // shell only
-          visit(Key{c.x + dx, c.y + dy, c.z + dz});
-        }
-    if (r >= 1 && static_cast<int>(best.size()) == k) {
-      const double covered = r * voxel_m_;
-      if (best.front().first <= covered * covered) break;
+  const double rings = std::ceil(max_dist_m * inv_voxel_);
+  const double cube = std::pow(2.0 * rings + 1.0, 3);
+  if (cube > 4.0 * static_cast<double>(voxels_.size())) {
+    // The search cube holds more cells than the map has voxels: scanning the map is cheaper.
+    for (const auto& [key, bucket] : voxels_) visit(key);
+  } else {
+    const int max_ring = std::max(1, static_cast<int>(rings));
+    for (int r = 0; r <= max_ring; ++r) {
+      for (int dx = -r; dx <= r; ++dx)
+        for (int dy = -r; dy <= r; ++dy)
+          for (int dz = -r; dz <= r; ++dz) {
+            if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r) continue;  // shell only
+            visit(Key{c.x + dx, c.y + dy, c.z + dz});
+          }
+      if (r >= 1 && static_cast<int>(best.size()) == k) {
+        const double covered = r * voxel_m_;
+        if (best.front().first <= covered * covered) break;
+      }
     }
   }
   std::sort_heap(best.begin(), best.end(), cmp);

@@ -48,6 +48,9 @@ TEST(VoxelHashMap, KnnFindsNeighboursBeyondTheFirstRingWhenTheyAreTheOnlyOnes) {
   EXPECT_TRUE(got[0].isApprox(Eigen::Vector3d(1.0, 0, 0)));
   EXPECT_TRUE(got[1].isApprox(Eigen::Vector3d(0, 1.5, 0)));
   EXPECT_EQ(map.knn(Eigen::Vector3d::Zero(), 5, 0.5, &got), 0);
+  // A huge radius on a small map scans the map instead of millions of empty cells.
+  EXPECT_EQ(map.knn(Eigen::Vector3d::Zero(), 5, 1e6, &got), 3);
+  EXPECT_TRUE(got[2].isApprox(Eigen::Vector3d(0, 0, 3.0)));
 }
 
 TEST(VoxelHashMap, VoxelCapBoundsThePointsPerVoxel) {
