@@ -1,0 +1,49 @@
+#pragma once
+// Static IMU initialisation: while the rig stands still, the mean specific force is gravity
+// (giving roll and pitch; yaw is set to 0) and the mean angular rate is the gyroscope bias.
+#include <Eigen/Geometry>
+#include <deque>
+#include <string>
+
+#include "mmlio/core/types.hpp"
+
+namespace mmlio::imu {
+
+struct ImuInitConfig {
+  double duration_s = 1.0;            // standstill window
+  double max_gyro_std_rad_s = 0.05;   // above: the rig is moving
+  double max_acc_std_m_s2 = 0.3;
+  double force_after_s = 6.0;         // never still for this long: initialise anyway (logged)
+};
+
+struct ImuInitResult {
+  bool ok = false;
+  Eigen::Quaterniond q_world_imu = Eigen::Quaterniond::Identity();  // gravity along -z, yaw 0
+  Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();
+  double gravity_norm_m_s2 = 0.0;     // |mean acc| over the window
+  double acc_scale = 1.0;             // 9.80665 when the accelerations looked like g
+  bool forced = false;                // initialised while moving (gyro bias left at 0)
+  std::string message;                // summary, or why not ready
+};
+
+class ImuInitializer {
+ public:
+  explicit ImuInitializer(ImuInitConfig cfg = {});
+  void add(const ImuSample& sample);
+  /// A full window that looked stationary (or the force_after_s fallback).
+  bool ready() const;
+  ImuInitResult result() const;
+
+ private:
+  struct WindowStats {
+    Eigen::Vector3d mean_acc, mean_gyro;
+    double acc_std, gyro_std, span_s;
+  };
+  WindowStats stats() const;
+
+  ImuInitConfig cfg_;
+  std::deque<ImuSample> window_;
+  Stamp first_ns_ = -1;
+};
+
+}  // namespace mmlio::imu

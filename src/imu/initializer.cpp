@@ -1,0 +1,76 @@
+#include "mmlio/imu/initializer.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+namespace mmlio::imu {
+
+ImuInitializer::ImuInitializer(ImuInitConfig cfg) : cfg_(cfg) {}
+
+void ImuInitializer::add(const ImuSample& sample) {
+  if (first_ns_ < 0) first_ns_ = sample.stamp_ns;
+  window_.push_back(sample);
+  while (window_.size() > 2 && toSec(window_.back().stamp_ns - window_[1].stamp_ns) >= cfg_.duration_s) {
+    window_.pop_front();
+  }
+}
+
+ImuInitializer::WindowStats ImuInitializer::stats() const {
+  WindowStats s{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 0.0, 0.0, 0.0};
+  if (window_.empty()) return s;
+  for (const auto& m : window_) {
+    s.mean_acc += m.acc_m_s2;
+    s.mean_gyro += m.gyro_rad_s;
+  }
+  const double n = static_cast<double>(window_.size());
+  s.mean_acc /= n;
+  s.mean_gyro /= n;
+  for (const auto& m : window_) {
+    s.acc_std += (m.acc_m_s2 - s.mean_acc).squaredNorm();
+    s.gyro_std += (m.gyro_rad_s - s.mean_gyro).squaredNorm();
+  }
+  s.acc_std = std::sqrt(s.acc_std / n);
+  s.gyro_std = std::sqrt(s.gyro_std / n);
+  s.span_s = toSec(window_.back().stamp_ns - window_.front().stamp_ns);
+  return s;
+}
+
+bool ImuInitializer::ready() const {
+  if (window_.size() < 10) return false;
+  const WindowStats s = stats();
+  if (toSec(window_.back().stamp_ns - first_ns_) >= cfg_.force_after_s) return true;
+  return s.span_s >= 0.95 * cfg_.duration_s && s.gyro_std <= cfg_.max_gyro_std_rad_s &&
+         s.acc_std <= cfg_.max_acc_std_m_s2;
+}
+
+ImuInitResult ImuInitializer::result() const {
+  ImuInitResult r;
+  const WindowStats s = stats();
+  char buf[256];
+  if (!ready()) {
+    std::snprintf(buf, sizeof(buf),
+                  "waiting for %.1f s at rest (window %.2f s, gyro std %.3f rad/s, acc std %.3f m/s^2)",
+                  cfg_.duration_s, s.span_s, s.gyro_std, s.acc_std);
+    r.message = buf;
+    return r;
+  }
+  const bool still = s.gyro_std <= cfg_.max_gyro_std_rad_s && s.acc_std <= cfg_.max_acc_std_m_s2;
+  r.ok = true;
+  r.forced = !still;
+  r.gravity_norm_m_s2 = s.mean_acc.norm();
+  r.acc_scale = r.gravity_norm_m_s2 < 3.0 ? 9.80665 : 1.0;
+  r.gyro_bias = still ? s.mean_gyro : Eigen::Vector3d::Zero();
+  // At rest the accelerometer measures -g, i.e. "up": rotate it onto +z, then remove the yaw.
+  const Eigen::Quaterniond q = Eigen::Quaterniond::FromTwoVectors(s.mean_acc, Eigen::Vector3d::UnitZ());
+  const Eigen::Matrix3d R = q.toRotationMatrix();
+  const double yaw = std::atan2(R(1, 0), R(0, 0));
+  r.q_world_imu = (Eigen::AngleAxisd(-yaw, Eigen::Vector3d::UnitZ()) * q).normalized();
+  const Eigen::Vector3d rpy = r.q_world_imu.toRotationMatrix().eulerAngles(2, 1, 0);
+  std::snprintf(buf, sizeof(buf), "%s|g|=%.3f m/s^2, gyro bias (%.4f %.4f %.4f) rad/s, roll %.2f pitch %.2f deg",
+                still ? "" : "rig never still, forced: ", r.gravity_norm_m_s2, r.gyro_bias.x(), r.gyro_bias.y(),
+                r.gyro_bias.z(), rpy[2] * 180 / M_PI, rpy[1] * 180 / M_PI);
+  r.message = buf;
+  return r;
+}
+
+}  // namespace mmlio::imu
