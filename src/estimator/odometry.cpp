@@ -1,0 +1,463 @@
+#include "mmlio/estimator/odometry.hpp"
+
+#include <ceres/ceres.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <unordered_map>
+
+#include "mmlio/core/log.hpp"
+#include "mmlio/estimator/imu_factor.hpp"
+#include "mmlio/estimator/lidar_factors.hpp"
+#include "mmlio/estimator/marginalization.hpp"
+#include "mmlio/estimator/pose_manifold.hpp"
+#include "mmlio/imu/imu_integrator.hpp"
+#include "mmlio/imu/preintegration.hpp"
+#include "mmlio/lidar/deskew.hpp"
+#include "mmlio/lidar/voxel_filter.hpp"
+#include "mmlio/map/geometry_fit.hpp"
+#include "mmlio/map/voxel_hash_map.hpp"
+
+namespace mmlio::estimator {
+namespace {
+
+constexpr double kMaxMatchDistM = 1.0;   // farther map neighbours make no correspondence
+constexpr int kNeighbours = 5;           // map points per line / plane fit
+constexpr std::size_t kMinCorrespondences = 30;
+
+// ---- parameter blocks <-> NavState ----
+struct States {
+  double pose[7];
+  double speed_bias[9];
+};
+
+void toBlocks(const NavState& s, States* b) {
+  Eigen::Map<Eigen::Vector3d>(b->pose) = s.p_world;
+  Eigen::Map<Eigen::Quaterniond>(b->pose + 3) = s.q_world_body.normalized();
+  Eigen::Map<Eigen::Vector3d>(b->speed_bias) = s.v_world;
+  Eigen::Map<Eigen::Vector3d>(b->speed_bias + 3) = s.bias.acc_m_s2;
+  Eigen::Map<Eigen::Vector3d>(b->speed_bias + 6) = s.bias.gyro_rad_s;
+}
+
+NavState fromBlocks(const States& b, Stamp stamp) {
+  NavState s;
+  s.stamp_ns = stamp;
+  s.p_world = Eigen::Map<const Eigen::Vector3d>(b.pose);
+  s.q_world_body = Eigen::Map<const Eigen::Quaterniond>(b.pose + 3).normalized();
+  s.v_world = Eigen::Map<const Eigen::Vector3d>(b.speed_bias);
+  s.bias.acc_m_s2 = Eigen::Map<const Eigen::Vector3d>(b.speed_bias + 3);
+  s.bias.gyro_rad_s = Eigen::Map<const Eigen::Vector3d>(b.speed_bias + 6);
+  return s;
+}
+
+Eigen::Isometry3d poseOf(const double* pose) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::Map<const Eigen::Quaterniond>(pose + 3).normalized().toRotationMatrix();
+  T.translation() = Eigen::Map<const Eigen::Vector3d>(pose);
+  return T;
+}
+
+void integrateSamples(imu::Preintegration& pre, const std::vector<ImuSample>& samples) { pre.integrate(samples); }
+
+/// Body-frame features of one sweep.
+struct Features {
+  std::vector<Eigen::Vector3d> edges, planes;
+};
+
+struct Keyframe {
+  Stamp stamp = 0;
+  States x;
+  Features features;
+  std::shared_ptr<imu::Preintegration> pre;  // from the previous keyframe in the window
+};
+
+/// A residual against the local map, found at the current estimate.
+struct Match {
+  int kind = 0;  // 1 plane, 2 edge
+  Eigen::Vector3d p_body, a, b;  // plane: a = normal, b.x() = d; edge: a = point, b = direction
+};
+
+std::vector<Match> findMatches(const Features& f, const Eigen::Isometry3d& T_world_body,
+                               const map::VoxelHashMap& edge_map, const map::VoxelHashMap& plane_map) {
+  const std::size_t n_planes = f.planes.size();
+  std::vector<Match> matches(n_planes + f.edges.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, matches.size(), 64), [&](const auto& range) {
+    std::vector<Eigen::Vector3d> nn;
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      const bool plane = i < n_planes;
+      const Eigen::Vector3d& p = plane ? f.planes[i] : f.edges[i - n_planes];
+      const Eigen::Vector3d q = T_world_body * p;
+      Match& m = matches[i];
+      if (plane) {
+        if (plane_map.knn(q, kNeighbours, kMaxMatchDistM, &nn) < kNeighbours) continue;
+        const map::PlaneFit fit = map::fitPlane(nn, 0.1);
+        if (!fit.ok) continue;
+        m = {1, p, fit.normal, Eigen::Vector3d(fit.d, 0, 0)};
+      } else {
+        if (edge_map.knn(q, kNeighbours, kMaxMatchDistM, &nn) < kNeighbours) continue;
+        const map::LineFit fit = map::fitLine(nn, 3.0);
+        if (!fit.ok) continue;
+        m = {2, p, fit.point, fit.direction};
+      }
+    }
+  });
+  matches.erase(std::remove_if(matches.begin(), matches.end(), [](const Match& m) { return m.kind == 0; }),
+                matches.end());
+  return matches;
+}
+
+ceres::CostFunction* lidarCost(const Match& m, double weight) {
+  if (m.kind == 1) return new PointToPlaneFactor(m.p_body, m.a, m.b.x(), weight);
+  return new PointToEdgeFactor(m.p_body, m.a, m.b, weight);
+}
+
+}  // namespace
+
+struct Odometry::Impl {
+  OdometryConfig cfg;
+  std::vector<LidarSetup> lidars;
+  Eigen::Vector3d g_world;
+
+  std::deque<ImuSample> imu;
+  imu::ImuInitializer initializer;
+  imu::ImuInitResult init_result;
+  bool initialized = false;
+
+  NavState last;  // at the end of the last processed sweep
+  map::VoxelHashMap edge_map, plane_map;
+  std::deque<Keyframe> window;
+  std::shared_ptr<MarginalizationInfo> prior;
+  std::vector<double*> prior_blocks;
+  std::shared_ptr<imu::Preintegration> pre_since_keyframe;
+  std::size_t keyframes = 0;
+  ceres::Manifold* pose_manifold = nullptr;  // owned by the problems (kept alive separately)
+
+  Impl(OdometryConfig c, std::vector<LidarSetup> l)
+      : cfg(std::move(c)),
+        lidars(std::move(l)),
+        g_world(0, 0, -cfg.gravity_m_s2),
+        initializer(cfg.imu_init),
+        edge_map(cfg.map_voxel_m, 20),
+        plane_map(cfg.map_voxel_m, 20) {}
+
+  std::vector<ImuSample> imuBuffer() const { return {imu.begin(), imu.end()}; }
+
+  const LidarSetup* setupOf(const std::string& name) const {
+    for (const auto& s : lidars)
+      if (s.extrinsic.name == name) return &s;
+    return nullptr;
+  }
+
+  // ---- stage: de-skew, features, bad frame, merge ----
+  Features extract(const lidar::AlignedSweep& sweep, const lidar::SweepMotion& motion, SweepResult* out) {
+    const double end_s = toSec(sweep.end_ns - sweep.start_ns);
+    std::vector<const LidarScan*> scans;
+    for (const auto& scan : sweep.scans)
+      if (setupOf(scan.sensor)) scans.push_back(&scan);
+    std::vector<lidar::FeatureCloud> clouds(scans.size());
+    std::vector<LidarScan> deskewed(scans.size());
+    std::vector<LidarFrameStats> stats(scans.size());
+    tbb::parallel_for(std::size_t(0), scans.size(), [&](std::size_t i) {
+      const LidarSetup& setup = *setupOf(scans[i]->sensor);
+      deskewed[i] = *scans[i];
+      lidar::deskewToEnd(deskewed[i], setup.extrinsic.T_imu_sensor, motion, end_s);
+      clouds[i] = lidar::extractFeatures(deskewed[i], setup.extrinsic.kind, setup.num_rings, cfg.features);
+      stats[i].sensor = setup.extrinsic.name;
+      stats[i].points = deskewed[i].points.size();
+      stats[i].edges = clouds[i].edges.size();
+      stats[i].planes = clouds[i].planes.size();
+      if (setup.extrinsic.kind == LidarKind::kSolidState) {
+        const lidar::BadFrameResult bad = lidar::checkSolidStateFrame(clouds[i], cfg.bad_frame);
+        stats[i].bad_frame = bad.bad;
+        stats[i].counted_edges = bad.counted_edges;
+      }
+    });
+
+    std::vector<Point> edges, planes;
+    for (std::size_t i = 0; i < scans.size(); ++i) {
+      const Eigen::Isometry3f T = setupOf(scans[i]->sensor)->extrinsic.T_imu_sensor.cast<float>();
+      auto toBody = [&T](std::vector<Point>& pts, std::vector<Point>* dst) {
+        for (Point p : pts) {
+          p.xyz = T * p.xyz;
+          dst->push_back(p);
+        }
+      };
+      if (!stats[i].bad_frame) {
+        toBody(clouds[i].edges, &edges);
+        toBody(clouds[i].planes, &planes);
+      }
+      if (cfg.keep_points) toBody(deskewed[i].points, &out->points_body);
+    }
+    out->lidars = std::move(stats);
+
+    Features f;
+    for (const Point& p : lidar::voxelDownsample(edges, cfg.edge_voxel_m)) f.edges.push_back(p.xyz.cast<double>());
+    for (const Point& p : lidar::voxelDownsample(planes, cfg.plane_voxel_m)) f.planes.push_back(p.xyz.cast<double>());
+    return f;
+  }
+
+  void addLidarResiduals(ceres::Problem& problem, double* pose, const std::vector<Match>& matches) {
+    const double w = 1.0 / cfg.lidar_sigma_m;
+    for (const Match& m : matches) {
+      problem.AddResidualBlock(lidarCost(m, w), new ceres::HuberLoss(cfg.huber_loss_m * w), pose);
+    }
+  }
+
+  ceres::Solver::Options solverOptions(int iterations) const {
+    ceres::Solver::Options o;
+    o.linear_solver_type = ceres::DENSE_SCHUR;
+    o.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+    o.max_num_iterations = iterations;
+    o.num_threads = 1;
+    o.minimizer_progress_to_stdout = false;
+    return o;
+  }
+
+  // ---- stage: scan-to-map registration of one sweep with an IMU factor to the previous one ----
+  std::size_t registerSweep(const Features& f, const std::shared_ptr<imu::Preintegration>& pre, const NavState& prev,
+                            NavState* state) {
+    States xi, xj;
+    toBlocks(prev, &xi);
+    toBlocks(*state, &xj);
+    std::size_t used = 0;
+    const int rounds = std::max(1, cfg.match_rounds);
+    for (int round = 0; round < rounds; ++round) {
+      const std::vector<Match> matches = findMatches(f, poseOf(xj.pose), edge_map, plane_map);
+      used = matches.size();
+      if (used < kMinCorrespondences) return used;
+      ceres::Problem::Options po;
+      po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+      ceres::Problem problem(po);
+      PoseManifold manifold;
+      problem.AddParameterBlock(xi.pose, 7, &manifold);
+      problem.AddParameterBlock(xj.pose, 7, &manifold);
+      problem.AddParameterBlock(xi.speed_bias, 9);
+      problem.AddParameterBlock(xj.speed_bias, 9);
+      problem.SetParameterBlockConstant(xi.pose);
+      problem.SetParameterBlockConstant(xi.speed_bias);
+      problem.AddResidualBlock(new ImuFactor(pre, g_world), nullptr, xi.pose, xi.speed_bias, xj.pose, xj.speed_bias);
+      addLidarResiduals(problem, xj.pose, matches);
+      ceres::Solver::Summary summary;
+      ceres::Solve(solverOptions(std::max(2, cfg.max_iterations / rounds)), &problem, &summary);
+    }
+    *state = fromBlocks(xj, state->stamp_ns);
+    return used;
+  }
+
+  bool isKeyframe(const NavState& s) const {
+    if (window.empty()) return true;
+    const NavState k = fromBlocks(window.back().x, window.back().stamp);
+    const double angle_deg = Eigen::AngleAxisd(k.q_world_body.inverse() * s.q_world_body).angle() * 180.0 / M_PI;
+    return angle_deg > cfg.keyframe_rotation_deg || (s.p_world - k.p_world).norm() > cfg.keyframe_translation_m ||
+           toSec(s.stamp_ns - k.stamp_ns) > cfg.keyframe_interval_s;
+  }
+
+  // ---- stage: sliding window over keyframes (edges, planes, IMU, marginalisation prior) ----
+  void optimizeWindow() {
+    if (window.size() < 2) return;
+    ceres::Problem::Options po;
+    po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem problem(po);
+    PoseManifold manifold;
+    for (auto& kf : window) {
+      problem.AddParameterBlock(kf.x.pose, 7, &manifold);
+      problem.AddParameterBlock(kf.x.speed_bias, 9);
+    }
+    if (prior && prior->valid()) {
+      problem.AddResidualBlock(new MarginalizationFactor(prior), nullptr, prior_blocks);
+    } else {
+      // Gauge: without a prior, the oldest keyframe anchors the window.
+      problem.SetParameterBlockConstant(window.front().x.pose);
+    }
+    for (std::size_t i = 1; i < window.size(); ++i) {
+      problem.AddResidualBlock(new ImuFactor(window[i].pre, g_world), nullptr, window[i - 1].x.pose,
+                               window[i - 1].x.speed_bias, window[i].x.pose, window[i].x.speed_bias);
+    }
+    for (auto& kf : window) {
+      addLidarResiduals(problem, kf.x.pose, findMatches(kf.features, poseOf(kf.x.pose), edge_map, plane_map));
+    }
+    ceres::Solver::Summary summary;
+    ceres::Solve(solverOptions(cfg.max_iterations), &problem, &summary);
+  }
+
+  void marginalizeOldest() {
+    if (window.size() <= static_cast<std::size_t>(std::max(cfg.window_size, 2))) return;
+    Keyframe& old = window[0];
+    Keyframe& next = window[1];
+    auto info = std::make_shared<MarginalizationInfo>();
+    if (prior && prior->valid()) {
+      std::vector<int> drop;
+      for (std::size_t i = 0; i < prior_blocks.size(); ++i)
+        if (prior_blocks[i] == old.x.pose || prior_blocks[i] == old.x.speed_bias) drop.push_back(static_cast<int>(i));
+      info->addResidualBlock({new MarginalizationFactor(prior), nullptr, prior_blocks, drop});
+    }
+    info->addResidualBlock({new ImuFactor(next.pre, g_world), nullptr,
+                            {old.x.pose, old.x.speed_bias, next.x.pose, next.x.speed_bias}, {0, 1}});
+    const double w = 1.0 / cfg.lidar_sigma_m;
+    for (const Match& m : findMatches(old.features, poseOf(old.x.pose), edge_map, plane_map)) {
+      info->addResidualBlock({lidarCost(m, w), new ceres::HuberLoss(cfg.huber_loss_m * w), {old.x.pose}, {0}});
+    }
+    info->preMarginalize();
+    info->marginalize();
+    std::unordered_map<long, double*> same_address;
+    for (std::size_t i = 1; i < window.size(); ++i) {
+      same_address[reinterpret_cast<long>(window[i].x.pose)] = window[i].x.pose;
+      same_address[reinterpret_cast<long>(window[i].x.speed_bias)] = window[i].x.speed_bias;
+    }
+    prior_blocks = info->keptBlockAddresses(same_address);
+    prior = info;
+    window.pop_front();  // deque: the other keyframes' parameter addresses stay valid
+  }
+
+  void addToMap(const Keyframe& kf) {
+    const Eigen::Isometry3d T = poseOf(kf.x.pose);
+    std::vector<Eigen::Vector3d> e, p;
+    e.reserve(kf.features.edges.size());
+    p.reserve(kf.features.planes.size());
+    for (const auto& v : kf.features.edges) e.push_back(T * v);
+    for (const auto& v : kf.features.planes) p.push_back(T * v);
+    edge_map.add(e);
+    plane_map.add(p);
+    edge_map.removeFarFrom(T.translation(), cfg.local_map_radius_m);
+    plane_map.removeFarFrom(T.translation(), cfg.local_map_radius_m);
+  }
+
+  void trimImu() {
+    while (imu.size() > 2 && imu[1].stamp_ns < last.stamp_ns - fromSec(1.0)) imu.pop_front();
+  }
+};
+
+Odometry::Odometry(OdometryConfig cfg, std::vector<LidarSetup> lidars)
+    : impl_(std::make_unique<Impl>(std::move(cfg), std::move(lidars))) {}
+Odometry::~Odometry() = default;
+
+void Odometry::addImu(const ImuSample& sample) {
+  auto& d = *impl_;
+  if (!d.imu.empty() && sample.stamp_ns <= d.imu.back().stamp_ns) {
+    log::emit(log::Level::kWarn, "IMU sample out of order or duplicated at ", toSec(sample.stamp_ns), " s: dropped");
+    return;
+  }
+  d.imu.push_back(sample);
+  if (!d.initialized) {
+    d.initializer.add(sample);
+    while (d.imu.size() > 4000) d.imu.pop_front();
+  }
+}
+
+bool Odometry::initialized() const { return impl_->initialized; }
+const imu::ImuInitResult& Odometry::imuInit() const { return impl_->init_result; }
+std::size_t Odometry::keyframes() const { return impl_->keyframes; }
+Stamp Odometry::lastImuNs() const { return impl_->imu.empty() ? 0 : impl_->imu.back().stamp_ns; }
+
+SweepResult Odometry::process(const lidar::AlignedSweep& sweep) {
+  auto& d = *impl_;
+  SweepResult out;
+  Stopwatch watch;
+
+  if (!d.initialized) {
+    if (!d.initializer.ready()) {
+      d.init_result = d.initializer.result();
+      return out;
+    }
+    d.init_result = d.initializer.result();
+    if (!d.init_result.ok) return out;
+    d.initialized = true;
+    d.last = NavState{};
+    d.last.stamp_ns = sweep.start_ns;
+    d.last.q_world_body = d.init_result.q_world_imu;
+    d.last.bias.gyro_rad_s = d.init_result.gyro_bias;
+    log::emit(log::Level::kInfo, "IMU initialised: ", d.init_result.message);
+  }
+
+  // ---- IMU prediction over the sweep, motion for de-skew ----
+  const NavState prev = d.last;
+  const Stamp t0 = std::max(prev.stamp_ns, sweep.start_ns - fromSec(0.2));
+  std::vector<ImuSample> samples = imu::imuBetween(d.imuBuffer(), prev.stamp_ns, sweep.end_ns);
+  NavState predicted = prev;
+  predicted.stamp_ns = sweep.end_ns;
+  auto pre = std::make_shared<imu::Preintegration>(prev.bias, d.cfg.imu_noise);
+  lidar::SweepMotion motion;
+  const bool imu_ok = samples.size() >= 2 && samples.front().stamp_ns <= prev.stamp_ns + fromSec(0.02) &&
+                      samples.back().stamp_ns >= sweep.end_ns - fromSec(0.02);
+  if (imu_ok) {
+    integrateSamples(*pre, samples);
+    if (!d.pre_since_keyframe) d.pre_since_keyframe = std::make_shared<imu::Preintegration>(prev.bias, d.cfg.imu_noise);
+    integrateSamples(*d.pre_since_keyframe, samples);
+    predicted = pre->predict(prev, d.g_world);
+    predicted.stamp_ns = sweep.end_ns;
+    std::vector<Stamp> query;
+    const int n = 10;
+    for (int k = 0; k <= n; ++k) query.push_back(std::max(t0, sweep.start_ns + (sweep.end_ns - sweep.start_ns) * k / n));
+    const std::vector<NavState> states = imu::propagate(prev, samples, query, d.g_world);
+    const Eigen::Isometry3d T_end_inv = states.back().pose().inverse();
+    std::vector<double> times;
+    std::vector<Eigen::Isometry3d> poses;
+    for (std::size_t k = 0; k < states.size(); ++k) {
+      times.push_back(toSec(query[k] - sweep.start_ns));
+      poses.push_back(T_end_inv * states[k].pose());
+    }
+    motion = lidar::SweepMotion(times, poses);
+  } else {
+    // No IMU across this sweep (gap or IMU stopped): constant velocity, no de-skew, logged.
+    predicted.p_world += prev.v_world * toSec(sweep.end_ns - prev.stamp_ns);
+    out.note = "no IMU over the sweep: constant-velocity prediction";
+    // The keyframe preintegration now misses an interval: restart the window (the map stays).
+    d.window.clear();
+    d.prior.reset();
+    d.prior_blocks.clear();
+    d.pre_since_keyframe.reset();
+    log::emit(log::Level::kWarn, "no IMU data over the sweep ending at ", toSec(sweep.end_ns), " s");
+  }
+  out.times_ms.emplace_back("imu_predict", watch.lapMs());
+
+  Features features = d.extract(sweep, motion, &out);
+  out.times_ms.emplace_back("deskew_features", watch.lapMs());
+
+  // ---- registration ----
+  NavState state = predicted;
+  bool tracked = true;
+  if (!d.plane_map.empty() && imu_ok) {
+    out.correspondences = d.registerSweep(features, pre, prev, &state);
+    if (out.correspondences < kMinCorrespondences) {
+      tracked = false;
+      state = predicted;
+      out.note = "only " + std::to_string(out.correspondences) + " map correspondences: IMU prediction kept";
+    }
+  }
+  out.times_ms.emplace_back("registration", watch.lapMs());
+
+  // ---- keyframe, sliding window, map ----
+  out.keyframe = d.isKeyframe(state) || d.plane_map.empty();
+  if (out.keyframe && tracked && (imu_ok || d.window.empty())) {
+    Keyframe kf;
+    kf.stamp = state.stamp_ns;
+    toBlocks(state, &kf.x);
+    kf.features = std::move(features);
+    kf.pre = d.pre_since_keyframe;
+    if (!d.window.empty() && !kf.pre) kf.pre = pre;
+    d.window.push_back(std::move(kf));
+    d.optimizeWindow();
+    out.times_ms.emplace_back("window", watch.lapMs());
+    d.marginalizeOldest();
+    out.times_ms.emplace_back("marginalize", watch.lapMs());
+    d.addToMap(d.window.back());
+    state = fromBlocks(d.window.back().x, state.stamp_ns);
+    d.pre_since_keyframe = std::make_shared<imu::Preintegration>(state.bias, d.cfg.imu_noise);
+    ++d.keyframes;
+  } else {
+    out.keyframe = false;
+    out.times_ms.emplace_back("window", 0.0);
+    out.times_ms.emplace_back("marginalize", 0.0);
+  }
+  out.times_ms.emplace_back("map_update", watch.lapMs());
+
+  d.last = state;
+  d.trimImu();
+  out.state = state;
+  out.status = tracked && imu_ok ? SweepResult::Status::kTracking : SweepResult::Status::kDegraded;
+  return out;
+}
+
+}  // namespace mmlio::estimator

@@ -1,0 +1,52 @@
+#include "mmlio/pipeline/online_pipeline.hpp"
+
+#include "mmlio/pipeline/odometry_setup.hpp"
+
+namespace mmlio::pipeline {
+namespace {
+
+lidar::SweepAligner::Config alignerConfig(const io::RigConfig& cfg, const std::string& mode) {
+  lidar::SweepAligner::Config c;
+  c.reference = io::referenceLidar(cfg, mode).name;
+  return c;
+}
+
+}  // namespace
+
+OnlinePipeline::OnlinePipeline(const io::RigConfig& cfg, const std::string& mode, SweepCallback on_sweep)
+    : aligner_(alignerConfig(cfg, mode)),
+      odometry_(odometryConfig(cfg), lidarSetups(cfg, mode)),
+      on_sweep_(std::move(on_sweep)) {
+  for (const auto& s : lidarSetups(cfg, mode)) offset_s_[s.extrinsic.name] = s.extrinsic.time_offset_s;
+}
+
+void OnlinePipeline::addImu(const ImuSample& sample) {
+  odometry_.addImu(sample);
+  drain(false);
+}
+
+void OnlinePipeline::addScan(LidarScan scan) {
+  const auto it = offset_s_.find(scan.sensor);
+  if (it == offset_s_.end()) return;
+  scan.start_ns += fromSec(it->second);  // t_imu = t_stamp + offset
+  aligner_.add(scan);
+  drain(false);
+}
+
+void OnlinePipeline::flush() { drain(true); }
+
+void OnlinePipeline::drain(bool all) {
+  lidar::AlignedSweep sweep;
+  while (aligner_.pop(&sweep)) pending_.push_back(std::move(sweep));
+  if (all) {
+    for (auto& s : aligner_.flush()) pending_.push_back(std::move(s));
+  }
+  while (!pending_.empty() && (all || pending_.front().end_ns <= odometry_.lastImuNs())) {
+    const estimator::SweepResult r = odometry_.process(pending_.front());
+    pending_.pop_front();
+    ++processed_;
+    on_sweep_(r);
+  }
+}
+
+}  // namespace mmlio::pipeline
