@@ -1,0 +1,176 @@
+#include "mmlio/sim/simulator.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "mmlio/core/error.hpp"
+#include "mmlio/sim/random.hpp"
+
+namespace mmlio::sim {
+
+namespace {
+
+constexpr std::uint64_t kVelodyneId = 1, kLivoxId = 2, kImuId = 3;
+constexpr Stamp kFramePeriodNs = 100000000LL;
+
+double deg(double d) { return d * M_PI / 180.0; }
+
+}  // namespace
+
+Simulator::Simulator(SimOptions options) : options_(std::move(options)) {
+  if (options_.duration_s < 0) throw Error("simulation duration must be >= 0 s (0 = the scenario's default)");
+  scenario_ = makeScenario(options_.scenario);
+  scene_ = Scene(scenario_.boxes);
+  motion_ = SplineMotion(walkKeyframes(scenario_.waypoints, scenario_.walk, options_.duration_s));
+  velodyne_beams_ = velodyneBeams(velodyne_);
+
+  imu_noise_.initial_bias.acc_m_s2 = Eigen::Vector3d(0.02, -0.015, 0.02);
+  imu_noise_.initial_bias.gyro_rad_s = Eigen::Vector3d(0.003, -0.002, 0.0025);
+
+  const double dt = 1.0 / imu_noise_.rate_hz;
+  const Stamp dt_ns = fromSec(dt);
+  const int n = static_cast<int>(std::floor(durationS() / dt + 1e-9)) + 1;
+  const double acc_sigma = imu_noise_.acc_noise_density / std::sqrt(dt);
+  const double gyro_sigma = imu_noise_.gyro_noise_density / std::sqrt(dt);
+  const double acc_walk = imu_noise_.acc_random_walk * std::sqrt(dt);
+  const double gyro_walk = imu_noise_.gyro_random_walk * std::sqrt(dt);
+  ImuBias bias = imu_noise_.initial_bias;
+  ground_truth_.reserve(n);
+  imu_.reserve(n);
+  true_bias_.reserve(n);
+  auto noise = [&](int k, int channel) {
+    return normalFromKey(hashKey(options_.seed, kImuId, static_cast<std::uint64_t>(k), static_cast<std::uint64_t>(channel)));
+  };
+  for (int k = 0; k < n; ++k) {
+    const Stamp stamp = kSimStartNs + k * dt_ns;
+    const MotionState m = motion_.at(k * dt);
+    ground_truth_.push_back({stamp, m.pose()});
+    true_bias_.push_back(bias);
+    ImuSample s;
+    s.stamp_ns = stamp;
+    s.acc_m_s2 = m.specificForce() + bias.acc_m_s2;
+    s.gyro_rad_s = m.omega_body + bias.gyro_rad_s;
+    for (int a = 0; a < 3; ++a) {
+      s.acc_m_s2[a] += acc_sigma * noise(k, a);
+      s.gyro_rad_s[a] += gyro_sigma * noise(k, 3 + a);
+      bias.acc_m_s2[a] += acc_walk * noise(k, 6 + a);
+      bias.gyro_rad_s[a] += gyro_walk * noise(k, 9 + a);
+    }
+    imu_.push_back(s);
+  }
+  // Path length by fine sampling of the position.
+  Eigen::Vector3d prev = motion_.at(0).p_world;
+  for (double t = 0.01; t <= durationS() + 1e-9; t += 0.01) {
+    const Eigen::Vector3d p = motion_.at(t).p_world;
+    path_length_m_ += (p - prev).norm();
+    prev = p;
+  }
+}
+
+NavState Simulator::trueState(Stamp stamp_ns) const {
+  const double t = toSec(stamp_ns - kSimStartNs);
+  const MotionState m = motion_.at(t);
+  NavState s;
+  s.stamp_ns = stamp_ns;
+  s.p_world = m.p_world;
+  s.q_world_body = m.q_world_body;
+  s.v_world = m.v_world;
+  if (!true_bias_.empty()) {
+    const int k = std::clamp(static_cast<int>(std::floor(t * imu_noise_.rate_hz + 1e-9)), 0,
+                             static_cast<int>(true_bias_.size()) - 1);
+    s.bias = true_bias_[k];
+  }
+  return s;
+}
+
+ImuSample Simulator::idealImu(Stamp stamp_ns) const {
+  const MotionState m = motion_.at(toSec(stamp_ns - kSimStartNs));
+  ImuSample s;
+  s.stamp_ns = stamp_ns;
+  s.acc_m_s2 = m.specificForce();
+  s.gyro_rad_s = m.omega_body;
+  return s;
+}
+
+int Simulator::numVelodyneSweeps() const {
+  const double first_s = toSec(kVelodynePhaseNs);
+  return std::max(0, static_cast<int>(std::floor((durationS() - first_s) / 0.1 + 1e-9)));
+}
+
+int Simulator::numLivoxFrames() const { return std::max(0, static_cast<int>(std::floor(durationS() / 0.1 + 1e-9))); }
+
+LidarExtrinsic Simulator::velodyneExtrinsic() const {
+  LidarExtrinsic e;
+  e.name = "velodyne";
+  e.kind = LidarKind::kSpinning;
+  e.T_imu_sensor.linear() = (Eigen::AngleAxisd(deg(3.0), Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(deg(-2.0), Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(deg(1.5), Eigen::Vector3d::UnitX()))
+                                .toRotationMatrix();
+  e.T_imu_sensor.translation() = Eigen::Vector3d(0.03, -0.02, 0.18);
+  e.time_offset_s = options_.velodyne_time_offset_s;
+  return e;
+}
+
+LidarExtrinsic Simulator::livoxExtrinsic() const {
+  LidarExtrinsic e;
+  e.name = "livox";
+  e.kind = LidarKind::kSolidState;
+  e.T_imu_sensor.translation() = Eigen::Vector3d(0.05512, 0.02226, -0.0297);
+  return e;
+}
+
+LidarScan Simulator::velodyneSweep(int k) const {
+  if (k < 0 || k >= numVelodyneSweeps()) throw Error("velodyne sweep index " + std::to_string(k) + " out of range");
+  LidarScan scan = cast(velodyne_beams_, velodyneTrueStartNs(k), velodyneExtrinsic().T_imu_sensor,
+                        velodyne_.range_noise_m, velodyne_.min_range_m, velodyne_.max_range_m, kVelodyneId, k);
+  scan.sensor = "velodyne";
+  scan.start_ns -= fromSec(options_.velodyne_time_offset_s);
+  return scan;
+}
+
+LidarScan Simulator::livoxFrame(int k) const {
+  if (k < 0 || k >= numLivoxFrames()) throw Error("livox frame index " + std::to_string(k) + " out of range");
+  LidarScan scan = cast(livoxBeams(livox_, k), kSimStartNs + k * kFramePeriodNs, livoxExtrinsic().T_imu_sensor,
+                        livox_.range_noise_m, livox_.min_range_m, livox_.max_range_m, kLivoxId, k);
+  scan.sensor = "livox";
+  return scan;
+}
+
+LidarScan Simulator::cast(const std::vector<Beam>& beams, Stamp true_start_ns, const Eigen::Isometry3d& T_imu_sensor,
+                          double range_noise_m, double min_range_m, double max_range_m, std::uint64_t sensor_id,
+                          int k) const {
+  std::vector<Point> points(beams.size());
+  std::vector<char> valid(beams.size(), 0);
+  const double t_start = toSec(true_start_ns - kSimStartNs);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, beams.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      const Beam& b = beams[i];
+      const Eigen::Isometry3d T_world_sensor = motion_.at(t_start + b.time_s).pose() * T_imu_sensor;
+      const Eigen::Vector3d d = T_world_sensor.linear() * b.dir.cast<double>();
+      const RayHit hit = scene_.cast(T_world_sensor.translation(), d, max_range_m);
+      if (hit.box < 0) continue;
+      const double range = hit.range_m + range_noise_m * normalFromKey(hashKey(options_.seed, sensor_id,
+                                                                               static_cast<std::uint64_t>(k), i));
+      if (range < min_range_m || range > max_range_m) continue;
+      // Intensity: the surface reflectivity, dimmed at grazing incidence.
+      const double cos_incidence = std::abs(d[hit.axis]);
+      Point& p = points[i];
+      p.xyz = (b.dir.cast<double>() * range).cast<float>();
+      p.intensity = std::round(scene_.boxes()[hit.box].reflectivity * static_cast<float>(0.5 + 0.5 * cos_incidence));
+      p.time_s = b.time_s;
+      p.ring = b.ring;
+      valid[i] = 1;
+    }
+  });
+  LidarScan scan;
+  scan.start_ns = true_start_ns;
+  scan.points.reserve(beams.size());
+  for (size_t i = 0; i < beams.size(); ++i)
+    if (valid[i]) scan.points.push_back(points[i]);
+  return scan;
+}
+
+}  // namespace mmlio::sim
