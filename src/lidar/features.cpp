@@ -57,8 +57,8 @@ double straightness(const std::vector<Eigen::Vector3d>& P, int i, int K, int str
   return along > 0 ? across / along : std::numeric_limits<double>::infinity();
 }
 
-// Features of one ordered scan line. Neighbours are taken every `stride` points, the stride chosen per point so that neighbours are
-// at least min_neighbour_spacing_m apart: on dense lines (a close wall, Livox) range noise would
+// Features of one ordered scan line. Neighbours are taken every `stride` points, the stride
+// chosen per point so that neighbours are at least min_neighbour_spacing_m apart: on dense lines (a close wall, Livox) range noise would
 // otherwise dominate the curvature. The centre is the mean of the points between its two nearest
 // neighbours, which damps its own noise without moving a corner.
 void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConfig& cfg,
@@ -66,25 +66,27 @@ void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConf
   const int n = static_cast<int>(P.size());
   if (n < 2 * K + 1) return;
   std::vector<double> R(P.size());
-  for (int j = 0; j < n; ++j) R[j] = P[j].norm();
-  // gaps_before[j] = number of breaks between consecutive points among 0..j.
-  std::vector<int> gaps_before(P.size(), 0);
+  std::vector<Eigen::Vector3d> U(P.size());      // bearings (unit rays); P has no zero-range points
+  std::vector<Eigen::Vector3d> prefix(P.size() + 1);  // prefix[j] = sum of P[0..j)
+  prefix[0].setZero();
+  for (int j = 0; j < n; ++j) {
+    R[j] = P[j].norm();
+    U[j] = P[j] / R[j];
+    prefix[j + 1] = prefix[j] + P[j];
+  }
   std::vector<char> gap(P.size(), 0);  // gap[j]: break between j and j+1
-  // Angular step of the line from the bearings (unit rays), which range noise does not inflate.
+  // Angular step of the line from the bearings, which range noise does not inflate.
   std::vector<double> step_rad;
   step_rad.reserve(P.size());
   for (int j = 0; j + 1 < n; ++j) {
-    const double d = (P[j + 1] - P[j]).norm();
-    gap[j] = d > cfg.continuity_jump_m;
-    gaps_before[j + 1] = gaps_before[j] + gap[j];
-    if (!gap[j] && R[j] > 0 && R[j + 1] > 0) step_rad.push_back((P[j + 1] / R[j + 1] - P[j] / R[j]).norm());
+    gap[j] = (P[j + 1] - P[j]).squaredNorm() > cfg.continuity_jump_m * cfg.continuity_jump_m;
+    if (!gap[j]) step_rad.push_back((U[j + 1] - U[j]).norm());
   }
   // A line that turns back on itself (the Livox pattern at the edge of its view) breaks there too.
-  for (int j = 1; j + 1 < n; ++j) {
-    if (gap[j] || R[j - 1] <= 0 || R[j] <= 0 || R[j + 1] <= 0) continue;
-    const Eigen::Vector3d u0 = P[j - 1] / R[j - 1], u1 = P[j] / R[j], u2 = P[j + 1] / R[j + 1];
-    if ((u2 - u1).dot(u1 - u0) < 0) gap[j] = 1;
-  }
+  for (int j = 1; j + 1 < n; ++j)
+    if (!gap[j] && (U[j + 1] - U[j]).dot(U[j] - U[j - 1]) < 0) gap[j] = 1;
+  // gaps_before[j] = number of breaks between consecutive points among 0..j.
+  std::vector<int> gaps_before(P.size(), 0);
   for (int j = 0; j + 1 < n; ++j) gaps_before[j + 1] = gaps_before[j] + gap[j];
   if (step_rad.empty()) return;
   std::nth_element(step_rad.begin(), step_rad.begin() + static_cast<std::ptrdiff_t>(step_rad.size() / 2), step_rad.end());
@@ -106,9 +108,7 @@ void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConf
     span_of[i] = span;
     const int lo = i - span, hi = i + span;
     if (lo >= 0 && hi < n && continuous(lo, hi)) {
-      Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-      for (int k = i - stride + 1; k <= i + stride - 1; ++k) centre += P[k];
-      centre /= (2 * stride - 1);
+      const Eigen::Vector3d centre = (prefix[i + stride] - prefix[i - stride + 1]) / (2 * stride - 1);
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();
       double sq = 0.0;
       for (int k = 1; k <= K; ++k) {
@@ -166,16 +166,20 @@ void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConf
       ++picked;
       for (int k = std::max(0, i - span_of[i]); k <= std::min(n - 1, i + span_of[i]); ++k) suppressed[k] = 1;
     }
-    // Planes: flattest first; the neighbourhood must be a straight run (scatter eigenvalues).
+    // Planes: the flattest max_planes_per_sector; the neighbourhood must be a straight run.
     order.clear();
     for (int i = begin; i < end; ++i)
       if (cand[i].label == Label::kPlane && !suppressed[i]) order.push_back(i);
-    std::sort(order.begin(), order.end(), [&](int a, int b) {
+    const auto flatter = [&](int a, int b) {
       return cand[a].curvature < cand[b].curvature || (cand[a].curvature == cand[b].curvature && a < b);
-    });
+    };
+    const std::size_t cap = static_cast<std::size_t>(std::max(0, cfg.max_planes_per_sector));
+    if (order.size() > cap) {
+      std::nth_element(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(cap), order.end(), flatter);
+      order.resize(cap);
+    }
     const std::size_t first_plane = planes->size();
     for (int i : order) {
-      if (static_cast<int>(planes->size() - first_plane) >= cfg.max_planes_per_sector) break;
       if (straightness(P, i, K, cand[i].stride) < cfg.plane_max_flatness) planes->push_back(static_cast<std::size_t>(i));
     }
     std::sort(planes->begin() + static_cast<std::ptrdiff_t>(first_plane), planes->end());

@@ -37,7 +37,7 @@ struct FeatureConfig {
   double plane_max_flatness = 0.05; // lambda_2 / lambda_1 of the neighbourhood for a plane point
   int sectors_per_line = 6;         // each line is split into this many sectors for even spreading
   int max_edges_per_sector = 20;    // LOAM-style cap on edges per sector
-  int max_planes_per_sector = 200;  // cap on planes per sector (the flattest are kept)
+  int max_planes_per_sector = 100;  // cap on planes per sector (the flattest are kept)
 };
 
 struct FeatureCloud {
