@@ -76,7 +76,8 @@ void BM_VoxelDownsample20cm(benchmark::State& state) {
 }
 BENCHMARK(BM_VoxelDownsample20cm)->Unit(benchmark::kMillisecond);
 
-// Local map of ~200k points (0.2 m voxels, 20 per voxel); 5-NN within 1 m, per query.
+// Local map of 200k points on a floor and a 5 m grid of walls over 40 x 40 m (~30 points/m^2,
+// sparse like a downsampled feature map); 5-NN within 1 m, per query. Arg: voxel edge in cm.
 void BM_VoxelHashMapKnn(benchmark::State& state) {
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> u(-20.0, 20.0), h(-1.5, 2.5);
@@ -88,7 +89,7 @@ void BM_VoxelHashMapKnn(benchmark::State& state) {
     else if (kind == 1) pts.emplace_back(std::round(u(rng) / 5) * 5, u(rng), h(rng));
     else pts.emplace_back(u(rng), std::round(u(rng) / 5) * 5, h(rng));
   }
-  map::VoxelHashMap m(0.2, 20);
+  map::VoxelHashMap m(0.01 * static_cast<double>(state.range(0)), 20);
   m.add(pts);
   std::vector<Eigen::Vector3d> queries(4096);
   for (std::size_t k = 0; k < queries.size(); ++k) {
@@ -101,7 +102,7 @@ void BM_VoxelHashMapKnn(benchmark::State& state) {
   }
   state.counters["map_points"] = static_cast<double>(m.size());
 }
-BENCHMARK(BM_VoxelHashMapKnn)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_VoxelHashMapKnn)->Arg(20)->Arg(50)->Arg(100)->Unit(benchmark::kMicrosecond);
 
 void BM_VoxelHashMapAdd(benchmark::State& state) {
   const LidarScan scan = synth::vlp16Room(synth::BoxRoom{}, 0.01);

@@ -37,10 +37,17 @@ class VoxelHashMap {
     bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
   };
   struct KeyHash {
+    // 21 bits per axis packed, then a splitmix64 finaliser: neighbouring voxels land in unrelated
+    // buckets (the classic xor-of-primes hash clusters them and lengthens the bucket chains).
     std::size_t operator()(const Key& k) const {
-      return static_cast<std::size_t>((static_cast<std::uint64_t>(k.x) * 73856093u) ^
-                                      (static_cast<std::uint64_t>(k.y) * 19349669u) ^
-                                      (static_cast<std::uint64_t>(k.z) * 83492791u));
+      std::uint64_t h = ((static_cast<std::uint64_t>(k.x) & 0x1FFFFF) << 42) |
+                        ((static_cast<std::uint64_t>(k.y) & 0x1FFFFF) << 21) | (static_cast<std::uint64_t>(k.z) & 0x1FFFFF);
+      h ^= h >> 30;
+      h *= 0xbf58476d1ce4e5b9ULL;
+      h ^= h >> 27;
+      h *= 0x94d049bb133111ebULL;
+      h ^= h >> 31;
+      return static_cast<std::size_t>(h);
     }
   };
   Key keyOf(const Eigen::Vector3d& p) const;
