@@ -17,7 +17,7 @@ std::vector<ImuSample> staticSamples(const Eigen::Quaterniond& q_world_imu, doub
     s.stamp_ns = fromSec(100.0 + i / 200.0);
     s.acc_m_s2 = q_world_imu.inverse() * Eigen::Vector3d(0, 0, 9.81) / scale + 0.02 * Eigen::Vector3d(n(rng), n(rng), n(rng));
     s.gyro_rad_s = gyro_bias + 0.003 * Eigen::Vector3d(n(rng), n(rng), n(rng)) +
-                   wobble_rad_s * Eigen::Vector3d(std::sin(i * 0.3), 0, 0);
+                   wobble_rad_s * Eigen::Vector3d(std::sin(i * 0.02), 0, 0);
     out.push_back(s);
   }
   return out;

@@ -11,8 +11,9 @@ namespace mmlio::imu {
 
 struct ImuInitConfig {
   double duration_s = 1.0;            // standstill window
-  double max_gyro_std_rad_s = 0.05;   // above: the rig is moving
-  double max_acc_std_m_s2 = 0.3;
+  // Standstill test on the spread of 0.1-window-long block means (white noise averages out):
+  double max_gyro_std_rad_s = 0.02;   // above: the rig is turning
+  double max_acc_std_m_s2 = 0.2;      // above: the rig is accelerating
   double force_after_s = 6.0;         // never still for this long: initialise anyway (logged)
 };
 

@@ -1,0 +1,56 @@
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+
+#include "mmlio/eval/evaluation.hpp"
+#include "sim_feed.hpp"
+
+namespace mmlio {
+namespace {
+
+struct SimRun {
+  Trajectory trajectory;
+  eval::EvalResult eval;
+  std::size_t degraded = 0;
+};
+
+SimRun runSimulated(const std::string& scenario, double duration_s, const std::string& mode) {
+  sim::SimOptions so;
+  so.scenario = scenario;
+  so.duration_s = duration_s;
+  sim::Simulator sim(so);
+  SimRun run;
+  pipeline::OnlinePipeline online(testing::simRigConfig(sim), mode, [&](const estimator::SweepResult& r) {
+    if (r.status == estimator::SweepResult::Status::kInitializing) return;
+    if (r.status == estimator::SweepResult::Status::kDegraded) ++run.degraded;
+    run.trajectory.push_back({r.state.stamp_ns, r.state.pose()});
+    if (std::getenv("MMLIO_SIM_DEBUG")) {
+      const NavState t = sim.trueState(r.state.stamp_ns);
+      std::printf("%.2f kf%d corr %zu p (%.3f %.3f %.3f) true (%.3f %.3f %.3f) v %.2f truev %.2f ba %.3f %.3f %.3f %s ms:",
+                  toSec(r.state.stamp_ns - sim::kSimStartNs), r.keyframe, r.correspondences, r.state.p_world.x(),
+                  r.state.p_world.y(), r.state.p_world.z(), t.p_world.x(), t.p_world.y(), t.p_world.z(),
+                  r.state.v_world.norm(), t.v_world.norm(), r.state.bias.acc_m_s2.x(), r.state.bias.acc_m_s2.y(),
+                  r.state.bias.acc_m_s2.z(), r.note.c_str());
+      for (const auto& [k, ms] : r.times_ms) std::printf(" %s=%.1f", k.c_str(), ms);
+      for (const auto& l : r.lidars) std::printf(" | %s e%zu p%zu%s", l.sensor.c_str(), l.edges, l.planes, l.bad_frame ? " BAD" : "");
+      std::printf("\n");
+    }
+  });
+  testing::replay(sim, online);
+  run.eval = eval::evaluate(sim.groundTruth(), run.trajectory);
+  return run;
+}
+
+TEST(OdometryOnSimulation, HviTracksTheOfficeWalkToCentimetres) {
+  const char* env = std::getenv("MMLIO_SIM_SECONDS");
+  const double seconds = env ? std::atof(env) : 12.0;
+  const SimRun run = runSimulated("office", seconds, "hvi");
+  std::printf("office hvi %.0f s: %zu poses, ATE %.4f m, RPE %.3f %%, e2e %.3f m, degraded %zu\n", seconds,
+              run.trajectory.size(), run.eval.ate_rmse_m, run.eval.rpe_10m_pct, run.eval.end_to_end_m, run.degraded);
+  EXPECT_GT(run.eval.coverage, 0.8);
+  EXPECT_LT(run.eval.ate_rmse_m, 0.05);
+  EXPECT_EQ(run.degraded, 0u);
+}
+
+}  // namespace
+}  // namespace mmlio
