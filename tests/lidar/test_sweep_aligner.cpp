@@ -130,3 +130,23 @@ TEST(SweepAligner, WhenTheReferenceStopsWindowsComeFromTheOtherLidarsFrames) {
   EXPECT_EQ(last.scans[0].points.size(), 500u);
   for (std::size_t k = 1; k < c.sweeps.size(); ++k) EXPECT_EQ(c.sweeps[k].start_ns, c.sweeps[k - 1].end_ns);
 }
+
+TEST(SweepAligner, WhenTheReferenceComesBackItsSweepsDefineTheWindowsAgain) {
+  float tag = 0;
+  std::vector<LidarScan> frames;
+  for (int k = 0; k < 3; ++k) frames.push_back(makeFrame("velodyne", 1.0 + 0.1 * k, 1000, 0.1, &tag));
+  for (int k = 10; k < 15; ++k) frames.push_back(makeFrame("velodyne", 1.0 + 0.1 * k, 1000, 0.1, &tag));  // gap 1.3-2.0 s
+  for (int k = 0; k < 15; ++k) frames.push_back(makeFrame("livox", 1.02 + 0.1 * k, 500, 0.1, &tag));
+  SweepAligner aligner({"velodyne", 0.3, 0.5});
+  const Collected c = run(aligner, frames);
+  EXPECT_FALSE(aligner.usingFallback());
+  EXPECT_EQ(c.duplicates, 0);
+  // All but the last livox frame's final 20 ms, which lies after the last reference sweep.
+  EXPECT_EQ(c.seen.size(), 8u * 1000 + 14u * 500 + 400u);
+  for (std::size_t k = 1; k < c.sweeps.size(); ++k) EXPECT_EQ(c.sweeps[k].start_ns, c.sweeps[k - 1].end_ns);
+  // The last windows are velodyne sweeps again, each with its 1000 points.
+  const auto& last = c.sweeps.back();
+  EXPECT_EQ(last.end_ns, fromSec(1.0 + 1.4) + fromSec(0.0999) + 1);
+  EXPECT_EQ(last.scans.front().sensor, "velodyne");
+  EXPECT_EQ(last.scans.front().points.size(), 1000u);
+}
