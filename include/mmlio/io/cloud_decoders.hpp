@@ -23,19 +23,10 @@
 #include <vector>
 
 #include "mmlio/core/types.hpp"
+#include "mmlio/io/decode_stats.hpp"
 #include "mmlio/io/livox_msg.hpp"
 
 namespace mmlio::io {
-
-/// Points kept and dropped (by reason) while decoding.
-struct DecodeStats {
-  std::size_t kept = 0;
-  std::size_t dropped_nan = 0;    // x, y, z or time not finite
-  std::size_t dropped_zero = 0;   // x = y = z = 0 (no return)
-  std::size_t dropped_range = 0;  // range outside [min_range_m, max_range_m]
-  void add(const DecodeStats& other);
-  std::size_t total() const { return kept + dropped_nan + dropped_zero + dropped_range; }
-};
 
 struct CloudDecodeOptions {
   std::string sensor;                    // copied into LidarScan::sensor

@@ -1,0 +1,72 @@
+#pragma once
+// Streams a ROS1 bag as time-ordered sensor events (IMU samples, decoded LiDAR scans) through
+// rosbag::View, one message at a time: the bag is never loaded whole. No ROS types here.
+//
+// Each configured LiDAR topic may carry sensor_msgs/PointCloud2 (any driver layout, see
+// cloud_decoders.hpp) or livox_ros_driver[2]/CustomMsg; the type found in the bag decides.
+// Topics match with or without the leading '/'.
+
+#include <cstddef>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "mmlio/core/types.hpp"
+#include "mmlio/io/decode_stats.hpp"
+#include "mmlio/io/rig_config.hpp"
+
+namespace mmlio::io {
+
+struct SourceLidar {
+  std::string name, topic;
+  LidarKind kind = LidarKind::kSpinning;
+  double min_range_m = 0.5;    // closer returns are dropped
+  double max_range_m = 100.0;  // farther returns are dropped
+  int num_rings = 16;          // rings assumed when a cloud has no `ring` field
+};
+
+struct BagSourceOptions {
+  std::string imu_topic;            // empty: no IMU stream
+  std::string acc_unit = "auto";    // auto | g | m/s2; auto: mean |acc| of the first 50 messages < 3 -> g
+  std::vector<SourceLidar> lidars;
+};
+
+/// From activeLidars(cfg, mode) and cfg.imu.
+BagSourceOptions bagSourceOptions(const RigConfig& cfg, const std::string& mode);
+
+struct SensorEvent {
+  enum class Kind { kImu, kLidar } kind = Kind::kImu;
+  ImuSample imu;   // kImu: acceleration already in m/s^2
+  LidarScan scan;  // kLidar: scan.sensor = SourceLidar::name; never empty
+};
+
+class BagSource {
+ public:
+  /// Opens and checks the bag. Throws mmlio::Error: missing file, not a bag, unindexed bag,
+  /// configured topic missing (listing the bag's topics), topic of an unexpected type.
+  BagSource(const std::string& path, const BagSourceOptions& options);
+  ~BagSource();
+  BagSource(const BagSource&) = delete;
+  BagSource& operator=(const BagSource&) = delete;
+
+  /// Next event in bag-time order; false at the end. Scans whose points were all dropped are
+  /// skipped (their drops still counted). A message that fails to deserialise is skipped,
+  /// counted and logged once per topic; a read error mid-bag ends the stream with one warning.
+  bool next(SensorEvent* event);
+
+  double accScale() const;         // multiplier applied to raw IMU acc: 1 or 9.80665
+  double progress() const;         // 0..1 by bag time
+  Stamp beginNs() const;           // first message of the streamed topics (bag time)
+  Stamp endNs() const;             // last message of the streamed topics (bag time)
+  const std::map<std::string, DecodeStats>& stats() const;  // per LiDAR name
+  std::size_t imuCount() const;    // IMU samples delivered so far
+  std::size_t skippedMessages() const;  // messages that failed to deserialise
+  bool truncated() const;          // the stream ended early on a read error
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace mmlio::io

@@ -1,0 +1,20 @@
+#pragma once
+// Private helper of src/io: opening a ROS1 bag for reading with one-line, actionable errors.
+#include <rosbag/bag.h>
+
+#include <string>
+#include <vector>
+
+namespace mmlio::io::detail {
+
+/// Opens `path` read-only. Throws mmlio::Error: missing file, not a bag, unindexed/truncated bag
+/// (suggesting `rosbag reindex`), unreadable.
+void openBagForReading(rosbag::Bag& bag, const std::string& path);
+
+/// "/a" and "a" name the same topic.
+std::string normalizeTopic(const std::string& topic);
+
+/// Sorted, comma-separated topic names of the bag with their types: "/imu (sensor_msgs/Imu), ...".
+std::string listTopics(rosbag::Bag& bag);
+
+}  // namespace mmlio::io::detail

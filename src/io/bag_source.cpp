@@ -1,0 +1,259 @@
+#include "mmlio/io/bag_source.hpp"
+
+#include <rosbag/bag.h>
+#include <rosbag/exceptions.h>
+#include <rosbag/view.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "bag_open.hpp"
+#include "imu_unit.hpp"
+#include "mmlio/core/error.hpp"
+#include "mmlio/core/log.hpp"
+#include "mmlio/io/cloud_decoders.hpp"
+
+namespace mmlio::io {
+namespace {
+
+constexpr const char* kPointCloud2 = "sensor_msgs/PointCloud2";
+constexpr const char* kImu = "sensor_msgs/Imu";
+
+bool isLivoxType(const std::string& t) { return t == kLivoxCustomMsgType || t == kLivox2CustomMsgType; }
+
+Stamp toNs(const ros::Time& t) { return static_cast<Stamp>(t.toNSec()); }
+
+}  // namespace
+
+BagSourceOptions bagSourceOptions(const RigConfig& cfg, const std::string& mode) {
+  BagSourceOptions o;
+  o.imu_topic = cfg.imu.topic;
+  o.acc_unit = cfg.imu.acc_unit;
+  for (const LidarConfig* l : activeLidars(cfg, mode)) {
+    SourceLidar s;
+    s.name = l->name;
+    s.topic = l->topic;
+    s.kind = l->kind();
+    s.min_range_m = l->min_range_m;
+    s.max_range_m = l->max_range_m;
+    s.num_rings = l->num_rings;
+    o.lidars.push_back(s);
+  }
+  return o;
+}
+
+struct BagSource::Impl {
+  /// What one streamed topic is and how to decode it.
+  struct Stream {
+    enum class Type { kImu, kCloud, kLivox } type = Type::kImu;
+    int lidar = -1;  // index into lidars / decode options
+    std::string topic;
+    std::size_t messages = 0;
+    std::size_t failed = 0;
+  };
+
+  std::string path;
+  rosbag::Bag bag;
+  std::unique_ptr<rosbag::View> view;
+  rosbag::View::iterator it;
+  std::map<std::string, Stream> streams;  // by normalised topic
+  std::vector<CloudDecodeOptions> decode;
+  std::map<std::string, DecodeStats> stats;
+  double acc_scale = 1.0;
+  Stamp begin_ns = 0, end_ns = 0, current_ns = 0;
+  std::size_t imu_count = 0, skipped = 0;
+  bool truncated = false, done = false;
+
+  void checkTopics(const BagSourceOptions& o);
+  void estimateScanPeriods();
+  bool decodeMessage(const rosbag::MessageInstance& m, SensorEvent* event);
+};
+
+void BagSource::Impl::checkTopics(const BagSourceOptions& o) {
+  // topic -> datatype; a topic recorded with several types keeps the first one we can decode.
+  std::map<std::string, std::string> types;
+  {
+    rosbag::View all(bag);
+    for (const rosbag::ConnectionInfo* c : all.getConnections()) {
+      std::string& t = types[detail::normalizeTopic(c->topic)];
+      if (t.empty() || !(t == kImu || t == kPointCloud2 || isLivoxType(t))) t = c->datatype;
+    }
+  }
+  auto lookup = [&](const std::string& topic, const std::string& what) -> const std::string& {
+    const auto f = types.find(detail::normalizeTopic(topic));
+    if (f == types.end()) {
+      throw Error("topic " + topic + " (" + what + ") is not in " + path + "; its topics: " + detail::listTopics(bag));
+    }
+    return f->second;
+  };
+  if (!o.imu_topic.empty()) {
+    const std::string& t = lookup(o.imu_topic, "IMU");
+    if (t != kImu) throw Error("topic " + o.imu_topic + " in " + path + " is " + t + ", expected " + kImu);
+    Stream s;
+    s.type = Stream::Type::kImu;
+    s.topic = o.imu_topic;
+    streams[detail::normalizeTopic(o.imu_topic)] = s;
+  }
+  for (std::size_t i = 0; i < o.lidars.size(); ++i) {
+    const SourceLidar& l = o.lidars[i];
+    const std::string key = detail::normalizeTopic(l.topic);
+    if (streams.count(key)) throw Error("topic " + l.topic + " is configured twice (LiDAR '" + l.name + "')");
+    const std::string& t = lookup(l.topic, "LiDAR '" + l.name + "'");
+    Stream s;
+    s.lidar = static_cast<int>(i);
+    s.topic = l.topic;
+    if (t == kPointCloud2) s.type = Stream::Type::kCloud;
+    else if (isLivoxType(t)) s.type = Stream::Type::kLivox;
+    else
+      throw Error("topic " + l.topic + " (LiDAR '" + l.name + "') in " + path + " is " + t + ", expected " +
+                  kPointCloud2 + " or " + kLivoxCustomMsgType);
+    streams[key] = s;
+    CloudDecodeOptions d;
+    d.sensor = l.name;
+    d.kind = l.kind;
+    d.min_range_m = l.min_range_m;
+    d.max_range_m = l.max_range_m;
+    d.num_rings = l.num_rings;
+    decode.push_back(d);
+    stats[l.name] = DecodeStats{};
+  }
+}
+
+/// Clouds without per-point time get it from the azimuth over one turn: take the turn period
+/// from the topic's message rate (index only, no message is read).
+void BagSource::Impl::estimateScanPeriods() {
+  for (auto& [key, s] : streams) {
+    if (s.lidar < 0) continue;
+    rosbag::View v(bag, rosbag::TopicQuery(s.topic));
+    const std::uint32_t n = v.size();
+    if (n < 2) continue;
+    const double span_s = (v.getEndTime() - v.getBeginTime()).toSec();
+    if (span_s > 0) decode[static_cast<std::size_t>(s.lidar)].scan_period_s = std::clamp(span_s / (n - 1), 0.01, 1.0);
+  }
+}
+
+BagSource::BagSource(const std::string& path, const BagSourceOptions& options) : impl_(std::make_unique<Impl>()) {
+  Impl& d = *impl_;
+  d.path = path;
+  detail::openBagForReading(d.bag, path);
+  try {
+    d.checkTopics(options);
+    if (d.streams.empty()) throw Error("nothing to read from " + path + ": no IMU topic and no LiDAR configured");
+    d.estimateScanPeriods();
+    if (!options.imu_topic.empty()) {
+      d.acc_scale = imuAccScale(d.bag, options.imu_topic, options.acc_unit, path);
+    }
+    std::vector<std::string> topics;
+    for (const auto& [key, s] : d.streams) {
+      topics.push_back(s.topic);
+      if (s.topic != key) topics.push_back(key);  // the bag may spell it either way
+      if (s.topic.front() == '/') topics.push_back(s.topic.substr(1));
+    }
+    d.view = std::make_unique<rosbag::View>(d.bag, rosbag::TopicQuery(topics));
+    d.begin_ns = toNs(d.view->getBeginTime());
+    d.end_ns = toNs(d.view->getEndTime());
+    if (d.view->size() == 0) d.begin_ns = d.end_ns = 0;
+    d.current_ns = d.begin_ns;
+    d.it = d.view->begin();
+  } catch (const rosbag::BagException& e) {
+    throw Error("cannot read bag " + path + " (" + e.what() + "): it may be truncated; try `rosbag reindex " + path +
+                "`");
+  }
+}
+
+BagSource::~BagSource() = default;
+
+bool BagSource::Impl::decodeMessage(const rosbag::MessageInstance& m, SensorEvent* event) {
+  auto f = streams.find(detail::normalizeTopic(m.getTopic()));
+  if (f == streams.end()) return false;
+  Stream& s = f->second;
+  const std::size_t index = s.messages++;
+  try {
+    switch (s.type) {
+      case Stream::Type::kImu: {
+        const auto msg = m.instantiate<sensor_msgs::Imu>();
+        if (!msg) throw std::runtime_error("type " + m.getDataType() + " / md5 " + m.getMD5Sum() + " is not sensor_msgs/Imu");
+        event->kind = SensorEvent::Kind::kImu;
+        event->imu = decodeImu(*msg, acc_scale);
+        ++imu_count;
+        return true;
+      }
+      case Stream::Type::kCloud:
+      case Stream::Type::kLivox: {
+        const auto li = static_cast<std::size_t>(s.lidar);
+        DecodeStats& st = stats[decode[li].sensor];
+        LidarScan scan;
+        if (s.type == Stream::Type::kCloud) {
+          const auto msg = m.instantiate<sensor_msgs::PointCloud2>();
+          if (!msg) throw std::runtime_error("md5 " + m.getMD5Sum() + " is not sensor_msgs/PointCloud2");
+          try {
+            scan = decodePointCloud2(*msg, decode[li], &st);
+          } catch (const Error& e) {
+            throw Error("topic " + s.topic + " message " + std::to_string(index) + " in " + path + ": " + e.what());
+          }
+        } else {
+          const auto msg = m.instantiate<LivoxCustomMsg>();
+          if (!msg) throw std::runtime_error("md5 " + m.getMD5Sum() + " is not " + kLivoxCustomMsgType);
+          scan = decodeLivox(*msg, decode[li], &st);
+        }
+        if (scan.points.empty()) return false;
+        event->kind = SensorEvent::Kind::kLidar;
+        event->scan = std::move(scan);
+        return true;
+      }
+    }
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    // rosbag / ros::serialization failures: skip this message, tell the user once per topic.
+    ++skipped;
+    if (s.failed++ == 0) {
+      log::warn("skipping message ", index, " of ", s.topic, " in ", path, ": cannot deserialise (", e.what(),
+                "); further failures on this topic are counted silently");
+    }
+  }
+  return false;
+}
+
+bool BagSource::next(SensorEvent* event) {
+  Impl& d = *impl_;
+  if (d.done || !d.view) return false;
+  try {
+    while (d.it != d.view->end()) {
+      const rosbag::MessageInstance& m = *d.it;
+      d.current_ns = toNs(m.getTime());
+      const bool got = d.decodeMessage(m, event);
+      ++d.it;
+      if (got) return true;
+    }
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    d.truncated = true;
+    d.done = true;
+    log::warn("stopped reading ", d.path, " at ", toSec(d.current_ns - d.begin_ns), " s of ",
+              toSec(d.end_ns - d.begin_ns), " s: ", e.what(), " (damaged bag? try `rosbag reindex ", d.path, "`)");
+    return false;
+  }
+  d.done = true;
+  d.current_ns = d.end_ns;
+  return false;
+}
+
+double BagSource::accScale() const { return impl_->acc_scale; }
+double BagSource::progress() const {
+  const Impl& d = *impl_;
+  if (d.done) return 1.0;
+  if (d.end_ns <= d.begin_ns) return 0.0;
+  return std::clamp(static_cast<double>(d.current_ns - d.begin_ns) / static_cast<double>(d.end_ns - d.begin_ns), 0.0,
+                    1.0);
+}
+Stamp BagSource::beginNs() const { return impl_->begin_ns; }
+Stamp BagSource::endNs() const { return impl_->end_ns; }
+const std::map<std::string, DecodeStats>& BagSource::stats() const { return impl_->stats; }
+std::size_t BagSource::imuCount() const { return impl_->imu_count; }
+std::size_t BagSource::skippedMessages() const { return impl_->skipped; }
+bool BagSource::truncated() const { return impl_->truncated; }
+
+}  // namespace mmlio::io

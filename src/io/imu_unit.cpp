@@ -1,0 +1,57 @@
+#include "imu_unit.hpp"
+
+#include <rosbag/view.h>
+#include <sensor_msgs/Imu.h>
+
+#include <cmath>
+
+#include "mmlio/core/error.hpp"
+#include "mmlio/core/log.hpp"
+
+namespace mmlio::io {
+
+double meanImuAccNorm(rosbag::Bag& bag, const std::string& topic, int samples) {
+  std::vector<std::string> topics{topic};
+  if (!topic.empty() && topic.front() == '/') topics.push_back(topic.substr(1));
+  else topics.push_back("/" + topic);
+  rosbag::View view(bag, rosbag::TopicQuery(topics));
+  double sum = 0.0;
+  int n = 0;
+  try {
+    for (const rosbag::MessageInstance& m : view) {
+      if (n >= samples) break;
+      const auto imu = m.instantiate<sensor_msgs::Imu>();
+      if (!imu) continue;
+      const auto& a = imu->linear_acceleration;
+      const double norm = std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z);
+      if (!std::isfinite(norm)) continue;
+      sum += norm;
+      ++n;
+    }
+  } catch (const std::exception&) {
+    // A damaged message ends the sample; the guess uses what was read.
+  }
+  return n > 0 ? sum / n : -1.0;
+}
+
+std::string guessImuUnit(rosbag::Bag& bag, const std::string& topic) {
+  const double mean = meanImuAccNorm(bag, topic);
+  if (mean < 0) return "";
+  return mean < 3.0 ? "g" : "m/s2";
+}
+
+double imuAccScale(rosbag::Bag& bag, const std::string& topic, const std::string& acc_unit, const std::string& path) {
+  if (acc_unit == "g") return kStandardGravity;
+  if (acc_unit == "m/s2") return 1.0;
+  if (acc_unit != "auto") throw Error("imu.acc_unit '" + acc_unit + "' is not auto, g or m/s2");
+  const double mean = meanImuAccNorm(bag, topic);
+  if (mean < 0) {
+    log::warn("cannot guess the IMU acceleration unit of ", topic, " in ", path, ": no readable message; assuming m/s^2");
+    return 1.0;
+  }
+  const bool g = mean < 3.0;
+  log::info("IMU ", topic, ": mean |acc| ", mean, " over the first messages -> ", g ? "g" : "m/s^2");
+  return g ? kStandardGravity : 1.0;
+}
+
+}  // namespace mmlio::io

@@ -1,0 +1,23 @@
+#pragma once
+// Private helper of src/io: which unit an IMU topic reports its acceleration in.
+#include <rosbag/bag.h>
+
+#include <string>
+
+namespace mmlio::io {
+
+inline constexpr double kStandardGravity = 9.80665;
+
+/// Mean |linear_acceleration| over the first `samples` messages of `topic` (its own View, so the
+/// main stream is untouched); negative when the topic has no readable message.
+double meanImuAccNorm(rosbag::Bag& bag, const std::string& topic, int samples = 50);
+
+/// "g" when the mean |acc| is below 3 (nobody accelerates at 0.3 g for the first messages of a
+/// bag, and gravity in m/s^2 is 9.8), "m/s2" otherwise, "" when the topic has no readable message.
+std::string guessImuUnit(rosbag::Bag& bag, const std::string& topic);
+
+/// Multiplier to m/s^2 for acc_unit "g" (9.80665), "m/s2" (1) or "auto" (guessed; 1 with a
+/// warning when it cannot be). Throws mmlio::Error naming `path` for another unit.
+double imuAccScale(rosbag::Bag& bag, const std::string& topic, const std::string& acc_unit, const std::string& path);
+
+}  // namespace mmlio::io
