@@ -1,20 +1,26 @@
 #pragma once
 // Unified edge / plane feature extraction for spinning and solid-state LiDARs (paper, "Union
 // Feature Extraction"; LOAM; Chen et al. 2021): points are split into scan lines (spinning
-// rings, Livox lines, or the rows of a range image when rings are missing), ordered along each
-// line, and every point is judged on its line neighbourhood:
-//  1. continuity: a 3-D gap > continuity_jump_m between consecutive points breaks the line. At a
-//     depth jump the near-side point is a break-point edge (a plane ends there: occlusion
-//     boundary); points on the far side are left out (their neighbourhood is occluded).
-//  2. curvature c = |sum_j (p_j - p_i)|^2 / sum_j |p_j - p_i|^2 over the neighbours j: scale free,
-//     0 on a straight run, ~4.1 at a right-angle corner with 5 neighbours each side, and about
-//     (range noise / point spacing)^2 on a noisy flat surface.
-//  3. scatter matrices: the two half-neighbourhoods give the line direction on each side; their
-//     angle (the bend) confirms a line edge (two surfaces meet) and rejects a single noisy point.
-//     The whole neighbourhood's eigenvalues (lambda_2 / lambda_1 small = straight) confirm a plane.
-// Edges (c > edge_threshold, bend > edge_min_bend_deg) and planes (c < plane_threshold, straight)
-// are picked per line sector (LOAM): sharpest / flattest first, at most max_*_per_sector each,
-// with non-maximum suppression of an edge's neighbours.
+// rings ordered by azimuth, Livox lines ordered by time, or the rows of a range image when rings
+// are missing), and every point is judged on its line neighbourhood of `neighbours` points each
+// side, taken every `stride` points so that they are >= min_neighbour_spacing_m apart (the
+// stride follows from the line's angular step, measured on bearings so range noise does not
+// inflate it): on dense lines (a close wall, the Livox pattern) range noise would otherwise
+// swamp the curvature.
+//  1. continuity: a 3-D gap > continuity_jump_m between consecutive points, or the line turning
+//     back on itself (Livox), breaks the line. At a depth jump the near-side point is a
+//     break-point edge (a plane ends there: occlusion boundary); far-side points are left out.
+//  2. curvature c = |sum_j (p_j - c_i)|^2 / sum_j |p_j - c_i|^2 over the neighbours j, with c_i the
+//     mean of the points between the two nearest neighbours: scale free, 0 on a straight run,
+//     ~4 at a right-angle corner with 5 neighbours each side, small on a noisy flat surface.
+//  3. scatter matrices: the principal axes of the two half-neighbourhoods meet at more than
+//     edge_min_bend_deg at a line edge (two surfaces meet), which rejects a single noisy point;
+//     a plane point's neighbourhood is a straight run ((l2 + l3) / l1 < plane_max_flatness).
+// Edges (c > edge_threshold) and planes (c < plane_threshold) are picked per line sector
+// (LOAM): sharpest edges first with suppression of their neighbours, at most
+// max_edges_per_sector; the flattest max_planes_per_sector planes.
+// Known limits: a ring's azimuth seam (+-180 deg) loses one neighbourhood of points; a Livox
+// cloud without line numbers is taken as a single time-ordered line.
 
 #include <cstddef>
 #include <vector>
