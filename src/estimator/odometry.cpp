@@ -13,6 +13,7 @@
 #include "mmlio/estimator/lidar_factors.hpp"
 #include "mmlio/estimator/marginalization.hpp"
 #include "mmlio/estimator/pose_manifold.hpp"
+#include "mmlio/estimator/prior_factor.hpp"
 #include "mmlio/imu/imu_integrator.hpp"
 #include "mmlio/imu/preintegration.hpp"
 #include "mmlio/lidar/deskew.hpp"
@@ -221,6 +222,8 @@ struct Odometry::Impl {
     States xi, xj;
     toBlocks(prev, &xi);
     toBlocks(*state, &xj);
+    double prev_sb[9];
+    std::copy(xi.speed_bias, xi.speed_bias + 9, prev_sb);
     std::size_t used = 0;
     const int rounds = std::max(1, cfg.match_rounds);
     for (int round = 0; round < rounds; ++round) {
@@ -236,7 +239,9 @@ struct Odometry::Impl {
       problem.AddParameterBlock(xi.speed_bias, 9);
       problem.AddParameterBlock(xj.speed_bias, 9);
       problem.SetParameterBlockConstant(xi.pose);
-      problem.SetParameterBlockConstant(xi.speed_bias);
+      // The previous velocity may move a little, so a position correction also corrects it.
+      problem.AddResidualBlock(new SpeedBiasPrior(prev_sb, cfg.prior_sigma_v_m_s, cfg.prior_sigma_ba, cfg.prior_sigma_bg),
+                               nullptr, xi.speed_bias);
       problem.AddResidualBlock(new ImuFactor(pre, g_world), nullptr, xi.pose, xi.speed_bias, xj.pose, xj.speed_bias);
       addLidarResiduals(problem, xj.pose, matches);
       ceres::Solver::Summary summary;

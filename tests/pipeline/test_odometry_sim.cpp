@@ -42,10 +42,15 @@ SimRun runSimulated(const std::string& scenario, double duration_s, const std::s
 }
 
 TEST(OdometryOnSimulation, HviTracksTheOfficeWalkToCentimetres) {
+  // MMLIO_SIM_SECONDS / _SCENARIO / _MODE turn this into a manual accuracy run.
   const char* env = std::getenv("MMLIO_SIM_SECONDS");
+  const char* scenario_env = std::getenv("MMLIO_SIM_SCENARIO");
+  const char* mode_env = std::getenv("MMLIO_SIM_MODE");
+  const std::string scenario = scenario_env ? scenario_env : "office";
+  const std::string mode = mode_env ? mode_env : "hvi";
   const double seconds = env ? std::atof(env) : 12.0;
-  const SimRun run = runSimulated("office", seconds, "hvi");
-  std::printf("office hvi %.0f s: %zu poses, ATE %.4f m, RPE %.3f %%, e2e %.3f m, degraded %zu\n", seconds,
+  const SimRun run = runSimulated(scenario, seconds, mode);
+  std::printf("%s %s %.0f s: %zu poses, ATE %.4f m, RPE %.3f %%, e2e %.3f m, degraded %zu\n", scenario.c_str(), mode.c_str(), seconds,
               run.trajectory.size(), run.eval.ate_rmse_m, run.eval.rpe_10m_pct, run.eval.end_to_end_m, run.degraded);
   EXPECT_GT(run.eval.coverage, 0.8);
   EXPECT_LT(run.eval.ate_rmse_m, 0.05);
