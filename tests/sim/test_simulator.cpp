@@ -1,0 +1,191 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "mmlio/core/error.hpp"
+#include "mmlio/core/so3.hpp"
+#include "mmlio/sim/simulator.hpp"
+
+namespace mmlio::sim {
+namespace {
+
+SimOptions opts(const std::string& scenario, double duration_s, std::uint64_t seed = 1, double offset_s = 0) {
+  SimOptions o;
+  o.scenario = scenario;
+  o.duration_s = duration_s;
+  o.seed = seed;
+  o.velodyne_time_offset_s = offset_s;
+  return o;
+}
+
+TEST(Motion, AnalyticVelocityAccelerationAndBodyRateMatchFiniteDifferences) {
+  const Scenario s = makeScenario("office");
+  const SplineMotion m(walkKeyframes(s.waypoints, s.walk));
+  const double h = 1e-5;
+  for (double t : {3.1, 7.77, 15.2, 16.9, 25.0}) {
+    const MotionState a = m.at(t - h), b = m.at(t + h), c = m.at(t);
+    EXPECT_LT(((b.p_world - a.p_world) / (2 * h) - c.v_world).norm(), 1e-6) << t;
+    EXPECT_LT(((b.v_world - a.v_world) / (2 * h) - c.a_world).norm(), 1e-5) << t;
+    const Eigen::Vector3d omega = so3::log(a.q_world_body.conjugate() * b.q_world_body) / (2 * h);
+    EXPECT_LT((omega - c.omega_body).norm(), 1e-5) << t;
+  }
+}
+
+TEST(Motion, OfficeUTurnsPeakNear90DegPerSecondAndWalkNear08MetresPerSecond) {
+  const Scenario s = makeScenario("office");
+  const SplineMotion m(walkKeyframes(s.waypoints, s.walk));
+  double max_rate = 0, max_speed = 0;
+  for (double t = 0; t < m.durationS(); t += 0.01) {
+    max_rate = std::max(max_rate, m.at(t).omega_body.norm());
+    max_speed = std::max(max_speed, m.at(t).v_world.norm());
+  }
+  EXPECT_NEAR(max_rate * 180 / M_PI, 90.0, 15.0);
+  EXPECT_NEAR(max_speed, 0.8, 0.2);
+}
+
+TEST(Simulator, UnknownScenarioThrowsNamingTheValidOnes) {
+  EXPECT_THROW(Simulator(opts("garage", 5)), Error);
+}
+
+TEST(Simulator, StartsAtRestAndEndsAtRestAtTheStartPose) {
+  for (const std::string name : {"office", "corridor", "hall"}) {
+    const Simulator sim(opts(name, name == "office" ? 0.0 : 12.0));
+    const Trajectory& gt = sim.groundTruth();
+    ASSERT_GT(gt.size(), 100u);
+    const Eigen::Isometry3d first = gt.front().T_world_body, last = gt.back().T_world_body;
+    EXPECT_LT((first.translation() - last.translation()).norm(), 1e-9) << name;
+    EXPECT_LT(Eigen::AngleAxisd(first.linear().transpose() * last.linear()).angle(), 1e-9) << name;
+    EXPECT_NEAR(first.translation().z(), 1.2, 1e-9);
+    for (double t : {0.0, 1.0, 2.0}) {
+      const NavState s = sim.trueState(sim.startNs() + fromSec(t));
+      EXPECT_LT(s.v_world.norm(), 1e-12) << name << " t=" << t;
+      const ImuSample imu = sim.idealImu(sim.startNs() + fromSec(t));
+      EXPECT_LT(imu.gyro_rad_s.norm(), 1e-12);
+    }
+    const NavState end = sim.trueState(sim.startNs() + fromSec(sim.durationS() - 0.5));
+    EXPECT_LT(end.v_world.norm(), 1e-12) << name;
+    EXPECT_GT(sim.pathLengthM(), name == "office" ? 20.0 : 0.0) << name;
+  }
+}
+
+TEST(Simulator, DefaultDurationsAreNearTheAdvertisedOnes) {
+  EXPECT_NEAR(Simulator(opts("office", 0)).durationS(), 40.0, 8.0);
+  EXPECT_NEAR(Simulator(opts("corridor", 0)).durationS(), 110.0, 15.0);
+  EXPECT_NEAR(Simulator(opts("hall", 0)).durationS(), 150.0, 20.0);
+  EXPECT_NEAR(Simulator(opts("hall", 30)).durationS(), 30.0, 1e-9);
+}
+
+TEST(Simulator, StaticImuReadsGravityPlusBiasUpwards) {
+  const Simulator sim(opts("office", 10));
+  Eigen::Vector3d acc = Eigen::Vector3d::Zero(), gyro = Eigen::Vector3d::Zero();
+  const int n = 300;  // 1.5 s at rest
+  for (int k = 0; k < n; ++k) {
+    acc += sim.imu()[k].acc_m_s2 / n;
+    gyro += sim.imu()[k].gyro_rad_s / n;
+  }
+  // White noise of the mean: 0.02 / sqrt(0.005 s) / sqrt(300) = 0.016 m/s^2, 0.0016 rad/s per axis.
+  EXPECT_LT((acc - Eigen::Vector3d(0, 0, 9.81) - sim.initialBias().acc_m_s2).cwiseAbs().maxCoeff(), 0.07);
+  EXPECT_LT((gyro - sim.initialBias().gyro_rad_s).cwiseAbs().maxCoeff(), 0.007);
+  EXPECT_EQ(sim.imu()[1].stamp_ns - sim.imu()[0].stamp_ns, 5000000);
+}
+
+TEST(Simulator, IntegratingTheNoiselessImuFromTheTrueInitialStateReproducesTheGroundTruthToMillimetres) {
+  const Simulator sim(opts("office", 0));
+  const Stamp t0 = sim.startNs() + fromSec(2.0);  // includes the start of motion and a U-turn
+  const double step_s = 5e-4, span_s = 10.0;
+  NavState s = sim.trueState(t0);
+  const Eigen::Vector3d g(0, 0, -kGravityM_s2);
+  for (int i = 0; i < static_cast<int>(span_s / step_s); ++i) {
+    const Stamp t = t0 + fromSec(i * step_s);
+    // Midpoint rule: rotation by the mid-step rate, velocity by the mid-step acceleration.
+    const ImuSample a = sim.idealImu(t), m = sim.idealImu(t + fromSec(step_s / 2)), b = sim.idealImu(t + fromSec(step_s));
+    const Eigen::Quaterniond q_mid = s.q_world_body * so3::exp(0.5 * step_s * m.gyro_rad_s);
+    const Eigen::Quaterniond q_end = s.q_world_body * so3::exp(step_s * m.gyro_rad_s);
+    // Simpson on the world acceleration for velocity, trapezoid-corrected for position.
+    const Eigen::Vector3d acc_a = s.q_world_body * a.acc_m_s2 + g, acc_m = q_mid * m.acc_m_s2 + g,
+                          acc_b = q_end * b.acc_m_s2 + g;
+    s.p_world += s.v_world * step_s + step_s * step_s * (acc_a + 2 * acc_m) / 6.0;
+    s.v_world += step_s * (acc_a + 4 * acc_m + acc_b) / 6.0;
+    s.q_world_body = q_end.normalized();
+  }
+  const NavState truth = sim.trueState(t0 + fromSec(span_s));
+  EXPECT_LT((s.p_world - truth.p_world).norm(), 0.003);
+  EXPECT_LT((s.v_world - truth.v_world).norm(), 0.001);
+  EXPECT_LT(so3::log(s.q_world_body.conjugate() * truth.q_world_body).norm(), 1e-4);
+  EXPECT_GT((truth.p_world - sim.trueState(t0).p_world).norm(), 3.0);  // it did move
+}
+
+// Median and 95th percentile distance to the scene of scan points projected with ground truth.
+std::pair<double, double> surfaceDistance(const Simulator& sim, const LidarScan& scan, const LidarExtrinsic& ext) {
+  std::vector<double> d;
+  const Stamp true_start = scan.start_ns + fromSec(ext.time_offset_s);
+  for (size_t i = 0; i < scan.points.size(); i += 7) {
+    const Point& p = scan.points[i];
+    const Eigen::Isometry3d T = sim.trueState(true_start + fromSec(p.time_s)).pose() * ext.T_imu_sensor;
+    d.push_back(sim.scene().distanceToSurface(T * p.xyz.cast<double>()));
+  }
+  std::sort(d.begin(), d.end());
+  return {d[d.size() / 2], d[d.size() * 95 / 100]};
+}
+
+TEST(Simulator, PointsOfSweepsProjectedWithGroundTruthLieOnSceneSurfaces) {
+  const Simulator sim(opts("office", 12, 1, 0.05));
+  for (int k : {30, 60}) {  // moving
+    const LidarScan v = sim.velodyneSweep(k);
+    EXPECT_EQ(v.sensor, "velodyne");
+    EXPECT_GT(v.points.size(), 20000u);
+    EXPECT_EQ(v.start_ns, sim.startNs() + kVelodynePhaseNs + k * 100000000LL - 50000000LL);
+    const auto [med_v, p95_v] = surfaceDistance(sim, v, sim.velodyneExtrinsic());
+    EXPECT_LT(med_v, 0.015);
+    EXPECT_LT(p95_v, 0.05);
+    const LidarScan l = sim.livoxFrame(k);
+    EXPECT_EQ(l.sensor, "livox");
+    EXPECT_GT(l.points.size(), 23000u);
+    const auto [med_l, p95_l] = surfaceDistance(sim, l, sim.livoxExtrinsic());
+    EXPECT_LT(med_l, 0.02);
+    EXPECT_LT(p95_l, 0.05);
+  }
+}
+
+TEST(Simulator, ExtrinsicsAreTheDocumentedOnes) {
+  const Simulator sim(opts("office", 5, 1, 0.02));
+  EXPECT_LT((sim.livoxExtrinsic().T_imu_sensor.translation() - Eigen::Vector3d(0.05512, 0.02226, -0.0297)).norm(), 1e-12);
+  EXPECT_TRUE(sim.livoxExtrinsic().T_imu_sensor.linear().isIdentity(1e-12));
+  const LidarExtrinsic v = sim.velodyneExtrinsic();
+  EXPECT_NEAR(Eigen::AngleAxisd(v.T_imu_sensor.linear()).angle() * 180 / M_PI, 3.9, 0.3);
+  EXPECT_DOUBLE_EQ(v.time_offset_s, 0.02);
+  EXPECT_EQ(v.kind, LidarKind::kSpinning);
+  EXPECT_EQ(sim.livoxExtrinsic().kind, LidarKind::kSolidState);
+}
+
+TEST(Simulator, SameSeedGivesIdenticalDataAndAnotherSeedDifferentNoise) {
+  const Simulator a(opts("corridor", 6, 7)), b(opts("corridor", 6, 7)), c(opts("corridor", 6, 8));
+  const LidarScan va = a.velodyneSweep(20), vb = b.velodyneSweep(20), vc = c.velodyneSweep(20);
+  ASSERT_EQ(va.points.size(), vb.points.size());
+  for (size_t i = 0; i < va.points.size(); ++i) ASSERT_EQ(va.points[i].xyz, vb.points[i].xyz);
+  const LidarScan la = a.livoxFrame(5), la2 = a.livoxFrame(5);  // on demand, repeatable
+  ASSERT_EQ(la.points.size(), la2.points.size());
+  for (size_t i = 0; i < la.points.size(); ++i) ASSERT_EQ(la.points[i].xyz, la2.points[i].xyz);
+  EXPECT_EQ(a.imu().back().acc_m_s2, b.imu().back().acc_m_s2);
+  EXPECT_NE(a.imu().back().acc_m_s2, c.imu().back().acc_m_s2);
+  EXPECT_NE(va.points[100].xyz, vc.points[100].xyz);
+}
+
+TEST(Simulator, SolidStateLidarSeesOnlyTheEndWallAtTheStartOfTheHall) {
+  const Simulator sim(opts("hall", 10));
+  const LidarScan l = sim.livoxFrame(5);
+  const Eigen::Isometry3d T = sim.trueState(l.start_ns).pose() * sim.livoxExtrinsic().T_imu_sensor;
+  ASSERT_GT(l.points.size(), 20000u);
+  for (size_t i = 0; i < l.points.size(); i += 50) EXPECT_NEAR((T * l.points[i].xyz.cast<double>()).x(), -12.0, 0.1);
+}
+
+TEST(Simulator, FrameCountsFitInsideTheSequence) {
+  const Simulator sim(opts("office", 5));
+  EXPECT_EQ(sim.numLivoxFrames(), 50);
+  EXPECT_EQ(sim.numVelodyneSweeps(), 49);
+  EXPECT_EQ(sim.groundTruth().size(), 1001u);
+  EXPECT_THROW(sim.livoxFrame(50), Error);
+}
+
+}  // namespace
+}  // namespace mmlio::sim
