@@ -1,0 +1,32 @@
+#pragma once
+// What is in a ROS1 bag, for `mmlio info` and for choosing topics in a rig config. No ROS types.
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "mmlio/core/types.hpp"
+
+namespace mmlio::io {
+
+struct TopicInfo {
+  std::string topic, type;
+  std::size_t messages = 0;
+  double rate_hz = 0;                // (messages - 1) / time span of the topic; 0 for < 2 messages
+  std::vector<std::string> fields;   // point clouds: "name(datatype)" per field, e.g. "ring(uint16)"
+  double mean_points = 0;            // point clouds: mean points per message over the first 50 messages
+};
+
+struct BagInfo {
+  std::string path;
+  Stamp begin_ns = 0, end_ns = 0;    // bag time of the first and last message
+  std::vector<TopicInfo> topics;     // sorted by topic name
+  std::string imu_unit_guess;        // first sensor_msgs/Imu topic: "g", "m/s2"; "" without IMU
+};
+
+/// Reads the index and a few messages per cloud / IMU topic. Throws mmlio::Error like BagSource.
+BagInfo describeBag(const std::string& path);
+/// Human-readable multi-line summary.
+std::string formatBagInfo(const BagInfo& info);
+
+}  // namespace mmlio::io

@@ -1,0 +1,122 @@
+#include "mmlio/io/bag_info.hpp"
+
+#include <rosbag/bag.h>
+#include <rosbag/exceptions.h>
+#include <rosbag/view.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <set>
+
+#include "bag_open.hpp"
+#include "imu_unit.hpp"
+#include "mmlio/core/error.hpp"
+#include "mmlio/core/log.hpp"
+#include "mmlio/io/cloud_decoders.hpp"
+
+namespace mmlio::io {
+namespace {
+
+constexpr int kSampledMessages = 50;
+
+/// Fields and mean point count over the first messages of a cloud topic.
+void sampleClouds(rosbag::Bag& bag, const std::vector<std::string>& names, TopicInfo& info) {
+  rosbag::View view(bag, rosbag::TopicQuery(names));
+  double points = 0;
+  int n = 0;
+  try {
+    for (const rosbag::MessageInstance& m : view) {
+      if (n >= kSampledMessages) break;
+      if (const auto c = m.instantiate<sensor_msgs::PointCloud2>()) {
+        if (info.fields.empty()) info.fields = pointFieldDescriptions(*c);
+        points += static_cast<double>(c->width) * c->height;
+        ++n;
+      } else if (const auto l = m.instantiate<LivoxCustomMsg>()) {
+        if (info.fields.empty()) {
+          info.fields = {"offset_time(uint32)", "x(float32)", "y(float32)", "z(float32)",
+                         "reflectivity(uint8)", "tag(uint8)",  "line(uint8)"};
+        }
+        points += static_cast<double>(l->points.size());
+        ++n;
+      }
+    }
+  } catch (const std::exception& e) {
+    log::warn("info: cannot read all sampled messages of ", info.topic, ": ", e.what());
+  }
+  if (n > 0) info.mean_points = points / n;
+}
+
+}  // namespace
+
+BagInfo describeBag(const std::string& path) {
+  BagInfo info;
+  info.path = path;
+  rosbag::Bag bag;
+  detail::openBagForReading(bag, path);
+  try {
+    rosbag::View all(bag);
+    if (all.size() > 0) {
+      info.begin_ns = static_cast<Stamp>(all.getBeginTime().toNSec());
+      info.end_ns = static_cast<Stamp>(all.getEndTime().toNSec());
+    }
+    std::map<std::string, std::string> types;
+    for (const rosbag::ConnectionInfo* c : all.getConnections()) {
+      if (!types.count(c->topic)) types[c->topic] = c->datatype;
+    }
+    for (const auto& [topic, type] : types) {
+      TopicInfo t;
+      t.topic = topic;
+      t.type = type;
+      rosbag::View v(bag, rosbag::TopicQuery(topic));
+      t.messages = v.size();
+      if (t.messages >= 2) {
+        const double span_s = (v.getEndTime() - v.getBeginTime()).toSec();
+        if (span_s > 0) t.rate_hz = static_cast<double>(t.messages - 1) / span_s;
+      }
+      if (type == "sensor_msgs/PointCloud2" || type == kLivoxCustomMsgType || type == kLivox2CustomMsgType) {
+        sampleClouds(bag, {topic}, t);
+      }
+      if (type == "sensor_msgs/Imu" && info.imu_unit_guess.empty()) info.imu_unit_guess = guessImuUnit(bag, topic);
+      info.topics.push_back(std::move(t));
+    }
+  } catch (const rosbag::BagException& e) {
+    throw Error("cannot read bag " + path + " (" + e.what() + "): it may be truncated; try `rosbag reindex " + path +
+                "`");
+  }
+  return info;
+}
+
+std::string formatBagInfo(const BagInfo& info) {
+  std::string out;
+  char line[512];
+  const double duration_s = toSec(info.end_ns - info.begin_ns);
+  std::snprintf(line, sizeof(line), "bag       %s\nduration  %.3f s (%.3f .. %.3f)\n", info.path.c_str(), duration_s,
+                toSec(info.begin_ns), toSec(info.end_ns));
+  out += line;
+  std::size_t tw = 5, yw = 4;
+  for (const TopicInfo& t : info.topics) {
+    tw = std::max(tw, t.topic.size());
+    yw = std::max(yw, t.type.size());
+  }
+  std::snprintf(line, sizeof(line), "%-*s  %-*s  %8s  %8s  %10s\n", static_cast<int>(tw), "topic", static_cast<int>(yw),
+                "type", "messages", "rate Hz", "points/msg");
+  out += line;
+  for (const TopicInfo& t : info.topics) {
+    char pts[32] = "";
+    if (t.mean_points > 0 || !t.fields.empty()) std::snprintf(pts, sizeof(pts), "%.0f", t.mean_points);
+    std::snprintf(line, sizeof(line), "%-*s  %-*s  %8zu  %8.2f  %10s\n", static_cast<int>(tw), t.topic.c_str(),
+                  static_cast<int>(yw), t.type.c_str(), t.messages, t.rate_hz, pts);
+    out += line;
+    if (!t.fields.empty()) {
+      std::string f;
+      for (const std::string& s : t.fields) f += (f.empty() ? "" : " ") + s;
+      out += std::string(tw + 2, ' ') + "fields: " + f + "\n";
+    }
+  }
+  out += "IMU acceleration unit (guess): " +
+         (info.imu_unit_guess.empty() ? std::string("no readable sensor_msgs/Imu topic") : info.imu_unit_guess) + "\n";
+  return out;
+}
+
+}  // namespace mmlio::io
