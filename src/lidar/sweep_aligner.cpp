@@ -51,7 +51,9 @@ void SweepAligner::add(const LidarScan& scan) {
   if (scan.sensor == cfg_.reference) {
     reference_mark_ns_ = std::max(reference_mark_ns_, end_ns);
     if (fallback_) {
-      log::info("sweep aligner: reference LiDAR '", cfg_.reference, "' is back, its sweeps define the windows again");
+      const std::string msg = "sweep aligner: reference LiDAR '" + cfg_.reference + "' is back, its sweeps define the windows again";
+      if (!resume_logged_) log::info(msg); else log::debug(msg);  // a flapping reference must not flood the log
+      resume_logged_ = true;
       fallback_ = false;
     }
     pushWindow(scan.start_ns, end_ns + 1);  // +1 ns: the last point belongs to this window

@@ -81,6 +81,7 @@ class SweepAligner {
   Stamp reference_mark_ns_ = 0;    // end of the newest reference sweep (or first data time)
   bool fallback_ = false;
   bool fallback_logged_ = false;
+  bool resume_logged_ = false;
   std::string fallback_sensor_;
   std::size_t dropped_points_ = 0;
 };
