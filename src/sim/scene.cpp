@@ -60,6 +60,10 @@ Scene::Scene(std::vector<Box> boxes, SceneConfig config) : boxes_(std::move(boxe
     const Box& b = boxes_[i];
     const int x0 = cellIndex(b.lo.x(), lo_.x(), nx_), x1 = cellIndex(b.hi.x(), lo_.x(), nx_);
     const int y0 = cellIndex(b.lo.y(), lo_.y(), ny_), y1 = cellIndex(b.hi.y(), lo_.y(), ny_);
+    if ((x1 - x0 + 1) * (y1 - y0 + 1) > config_.large_box_cells) {
+      large_boxes_.push_back(i);  // floors, ceilings, long walls: tested once per ray, not per cell
+      continue;
+    }
     for (int ix = x0; ix <= x1; ++ix)
       for (int iy = y0; iy <= y1; ++iy) cells[static_cast<size_t>(iy) * nx_ + ix].push_back(i);
   }
@@ -98,7 +102,17 @@ RayHit Scene::cast(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double ma
     t_enter = std::max(t_enter, ta);
     t_leave = std::min(t_leave, tb);
   }
-  if (t_enter > t_leave) return hit;
+  // Large boxes first: their hit bounds the walk through the grid.
+  for (std::uint32_t i : large_boxes_) {
+    int axis;
+    const double t = slab(o, inv_d, boxes_[i], 1e-9, axis);
+    if (t < hit.range_m) hit = {t, static_cast<int>(i), axis};
+  }
+  t_leave = std::min(t_leave, hit.range_m);
+  if (t_enter > t_leave) {
+    if (hit.range_m > max_range_m) hit = RayHit();
+    return hit;
+  }
   // 2-D DDA over the cells from the entry point.
   const Eigen::Vector3d p = o + t_enter * d;
   int ix = std::clamp(static_cast<int>(std::floor((p.x() - lo_.x()) / c)), 0, nx_ - 1);

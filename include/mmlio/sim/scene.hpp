@@ -29,7 +29,8 @@ struct RayHit {
 };
 
 struct SceneConfig {
-  double cell_size_m = 1.0;  // side of the (x, y) grid cells
+  double cell_size_m = 1.0;    // side of the (x, y) grid cells
+  int large_box_cells = 32;    // boxes covering more cells are tested once per ray instead
 };
 
 class Scene {
@@ -55,6 +56,7 @@ class Scene {
   int nx_ = 0, ny_ = 0;
   std::vector<std::uint32_t> cell_start_;  // CSR: boxes of cell (ix, iy) are
   std::vector<std::uint32_t> cell_boxes_;  // cell_boxes_[cell_start_[c] .. cell_start_[c+1])
+  std::vector<std::uint32_t> large_boxes_;
 };
 
 }  // namespace mmlio::sim
