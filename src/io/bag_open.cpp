@@ -11,33 +11,50 @@
 
 namespace mmlio::io::detail {
 
-void openBagForReading(rosbag::Bag& bag, const std::string& path) {
+namespace {
+
+void checkFile(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw Error("bag not found: " + path);
   if (std::filesystem::is_directory(path, ec)) throw Error("bag path is a directory, not a file: " + path);
-  {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error("cannot read bag " + path + " (permission denied?)");
-    char magic[13] = {};
-    in.read(magic, 13);
-    const std::string head(magic, static_cast<std::size_t>(in.gcount()));
-    if (head.rfind("#ROSBAG V2.0", 0) != 0) {
-      if (head.rfind("#ROSBAG V", 0) == 0)
-        throw Error(path + " is an old ROS bag format (" + head.substr(1, 11) + "): run `rosbag fix` to convert it");
-      throw Error(path + " is not a ROS1 bag (no #ROSBAG V2.0 header; ROS2 bags are not supported)");
-    }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error("cannot read bag " + path + " (permission denied?)");
+  char magic[13] = {};
+  in.read(magic, 13);
+  const std::string head(magic, static_cast<std::size_t>(in.gcount()));
+  if (head.rfind("#ROSBAG V2.0", 0) != 0) {
+    if (head.rfind("#ROSBAG V", 0) == 0)
+      throw Error(path + " is an old ROS bag format (" + head.substr(1, 11) + "): run `rosbag fix` to convert it");
+    throw Error(path + " is not a ROS1 bag (no #ROSBAG V2.0 header; ROS2 bags are not supported)");
   }
+}
+
+}  // namespace
+
+std::string reindexHint(const std::string& path, const std::string& why) {
+  return "cannot read bag " + path + " (" + why + "): it is truncated or unindexed; run `rosbag reindex " + path + "`";
+}
+
+bool tryOpenIndexed(rosbag::Bag& bag, const std::string& path, std::string* why) {
+  checkFile(path);
   try {
     bag.open(path, rosbag::bagmode::Read);
+    return true;
   } catch (const rosbag::BagUnindexedException&) {
-    throw Error("bag " + path + " is unindexed (truncated or still recording): run `rosbag reindex " + path + "`");
-  } catch (const rosbag::BagException& e) {
-    throw Error("cannot read bag " + path + " (" + e.what() + "): it may be truncated; try `rosbag reindex " +
-                path + "`");
+    *why = "no index";
   } catch (const std::exception& e) {
-    throw Error("cannot read bag " + path + " (" + e.what() + "): it may be truncated; try `rosbag reindex " +
-                path + "`");
+    *why = e.what();
   }
+  try {
+    bag.close();
+  } catch (...) {
+  }
+  return false;
+}
+
+void openBagForReading(rosbag::Bag& bag, const std::string& path) {
+  std::string why;
+  if (!tryOpenIndexed(bag, path, &why)) throw Error(reindexHint(path, why));
 }
 
 std::string normalizeTopic(const std::string& topic) {

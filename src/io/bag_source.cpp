@@ -6,9 +6,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <boost/make_shared.hpp>
 #include <set>
 
 #include "bag_open.hpp"
+#include "raw_bag_scanner.hpp"
 #include "imu_unit.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
@@ -23,6 +25,29 @@ constexpr const char* kImu = "sensor_msgs/Imu";
 bool isLivoxType(const std::string& t) { return t == kLivoxCustomMsgType || t == kLivox2CustomMsgType; }
 
 Stamp toNs(const ros::Time& t) { return static_cast<Stamp>(t.toNSec()); }
+
+/// A message read through the bag index.
+struct IndexedMessage {
+  const rosbag::MessageInstance& m;
+  std::string topic() const { return m.getTopic(); }
+  std::string md5() const { return m.getMD5Sum(); }
+  template <class T> boost::shared_ptr<T> instantiate() const { return m.instantiate<T>(); }
+};
+
+/// A message read from the chunks of an unindexed bag.
+struct ChunkMessage {
+  const detail::RawMessage& m;
+  const detail::RawConnection& c;
+  std::string topic() const { return c.topic; }
+  std::string md5() const { return c.md5sum; }
+  template <class T> boost::shared_ptr<T> instantiate() const {
+    if (c.md5sum != ros::message_traits::MD5Sum<T>::value()) return {};
+    auto out = boost::make_shared<T>();
+    ros::serialization::IStream in(const_cast<std::uint8_t*>(m.data.data()), static_cast<std::uint32_t>(m.data.size()));
+    ros::serialization::deserialize(in, *out);
+    return out;
+  }
+};
 
 }  // namespace
 
@@ -57,6 +82,10 @@ struct BagSource::Impl {
   rosbag::Bag bag;
   std::unique_ptr<rosbag::View> view;
   rosbag::View::iterator it;
+  // Unindexed / truncated bag: read chunk by chunk instead of through the index.
+  std::unique_ptr<detail::RawBagScanner> raw;
+  std::size_t raw_chunk = 0, raw_pos = 0;
+  std::vector<detail::RawMessage> raw_buf;
   std::map<std::string, Stream> streams;  // by normalised topic
   std::vector<CloudDecodeOptions> decode;
   std::map<std::string, DecodeStats> stats;
@@ -65,25 +94,30 @@ struct BagSource::Impl {
   std::size_t imu_count = 0, skipped = 0;
   bool truncated = false, done = false;
 
-  void checkTopics(const BagSourceOptions& o);
+  void checkTopics(const BagSourceOptions& o, const std::vector<std::pair<std::string, std::string>>& connections);
   void estimateScanPeriods();
-  bool decodeMessage(const rosbag::MessageInstance& m, SensorEvent* event);
+  void openRaw(const BagSourceOptions& options, const std::string& why);
+  template <class Msg> bool decodeMessage(const Msg& m, SensorEvent* event);
+  bool nextRaw(SensorEvent* event);
 };
 
-void BagSource::Impl::checkTopics(const BagSourceOptions& o) {
+void BagSource::Impl::checkTopics(const BagSourceOptions& o,
+                                   const std::vector<std::pair<std::string, std::string>>& connections) {
   // topic -> datatype; a topic recorded with several types keeps the first one we can decode.
   std::map<std::string, std::string> types;
-  {
-    rosbag::View all(bag);
-    for (const rosbag::ConnectionInfo* c : all.getConnections()) {
-      std::string& t = types[detail::normalizeTopic(c->topic)];
-      if (t.empty() || !(t == kImu || t == kPointCloud2 || isLivoxType(t))) t = c->datatype;
-    }
+  for (const auto& [topic, datatype] : connections) {
+    std::string& t = types[detail::normalizeTopic(topic)];
+    if (t.empty() || !(t == kImu || t == kPointCloud2 || isLivoxType(t))) t = datatype;
   }
+  auto topicList = [&] {
+    std::string out;
+    for (const auto& [t, type] : types) out += (out.empty() ? "" : ", ") + t + " (" + type + ")";
+    return out.empty() ? std::string("(none)") : out;
+  };
   auto lookup = [&](const std::string& topic, const std::string& what) -> const std::string& {
     const auto f = types.find(detail::normalizeTopic(topic));
     if (f == types.end()) {
-      throw Error("topic " + topic + " (" + what + ") is not in " + path + "; its topics: " + detail::listTopics(bag));
+      throw Error("topic " + topic + " (" + what + ") is not in " + path + "; its topics: " + topicList());
     }
     return f->second;
   };
@@ -136,9 +170,18 @@ void BagSource::Impl::estimateScanPeriods() {
 BagSource::BagSource(const std::string& path, const BagSourceOptions& options) : impl_(std::make_unique<Impl>()) {
   Impl& d = *impl_;
   d.path = path;
-  detail::openBagForReading(d.bag, path);
+  std::string why;
+  if (!detail::tryOpenIndexed(d.bag, path, &why)) {
+    d.openRaw(options, why);
+    return;
+  }
   try {
-    d.checkTopics(options);
+    std::vector<std::pair<std::string, std::string>> connections;
+    {
+      rosbag::View all(d.bag);
+      for (const rosbag::ConnectionInfo* c : all.getConnections()) connections.emplace_back(c->topic, c->datatype);
+    }
+    d.checkTopics(options, connections);
     if (d.streams.empty()) throw Error("nothing to read from " + path + ": no IMU topic and no LiDAR configured");
     d.estimateScanPeriods();
     if (!options.imu_topic.empty()) {
@@ -157,23 +200,77 @@ BagSource::BagSource(const std::string& path, const BagSourceOptions& options) :
     d.current_ns = d.begin_ns;
     d.it = d.view->begin();
   } catch (const rosbag::BagException& e) {
-    throw Error("cannot read bag " + path + " (" + e.what() + "): it may be truncated; try `rosbag reindex " + path +
-                "`");
+    throw Error(detail::reindexHint(path, e.what()));
+  }
+}
+
+void BagSource::Impl::openRaw(const BagSourceOptions& options, const std::string& why) {
+  raw = std::make_unique<detail::RawBagScanner>(path);
+  if (raw->messages() == 0) throw Error(detail::reindexHint(path, why));
+  std::vector<std::pair<std::string, std::string>> connections;
+  for (const auto& [id, c] : raw->connections()) connections.emplace_back(c.topic, c.datatype);
+  checkTopics(options, connections);
+  if (streams.empty()) throw Error("nothing to read from " + path + ": no IMU topic and no LiDAR configured");
+  truncated = true;
+  begin_ns = current_ns = raw->beginNs();
+  end_ns = raw->endNs();
+  log::warn("bag ", path, " is truncated or unindexed (", why, "): reading its ", raw->messages(),
+            " complete messages (", toSec(end_ns - begin_ns), " s) from the chunks; `rosbag reindex ", path,
+            "` would restore the index");
+  if (!options.imu_topic.empty()) {
+    const std::string imu_key = detail::normalizeTopic(options.imu_topic);
+    acc_scale = imuAccScaleFromMean(
+        [&] {
+          double sum = 0;
+          int n = 0;
+          for (std::size_t i = 0; i < raw->chunks().size() && n < 50; ++i) {
+            for (const detail::RawMessage& m : raw->readChunk(i)) {
+              const auto c = raw->connections().find(m.conn);
+              if (c == raw->connections().end() || detail::normalizeTopic(c->second.topic) != imu_key) continue;
+              try {
+                const auto imu = ChunkMessage{m, c->second}.instantiate<sensor_msgs::Imu>();
+                if (!imu) continue;
+                const auto& a = imu->linear_acceleration;
+                sum += std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z);
+                if (++n >= 50) break;
+              } catch (const std::exception&) {
+              }
+            }
+          }
+          return n > 0 ? sum / n : -1.0;
+        },
+        options.imu_topic, options.acc_unit, path);
+  }
+}
+
+bool BagSource::Impl::nextRaw(SensorEvent* event) {
+  while (true) {
+    if (raw_pos >= raw_buf.size()) {
+      if (raw_chunk >= raw->chunks().size()) return false;
+      raw_buf = raw->readChunk(raw_chunk++);
+      raw_pos = 0;
+      continue;
+    }
+    const detail::RawMessage& m = raw_buf[raw_pos++];
+    const auto c = raw->connections().find(m.conn);
+    if (c == raw->connections().end()) continue;
+    current_ns = m.time_ns;
+    if (decodeMessage(ChunkMessage{m, c->second}, event)) return true;
   }
 }
 
 BagSource::~BagSource() = default;
 
-bool BagSource::Impl::decodeMessage(const rosbag::MessageInstance& m, SensorEvent* event) {
-  auto f = streams.find(detail::normalizeTopic(m.getTopic()));
+template <class Msg> bool BagSource::Impl::decodeMessage(const Msg& m, SensorEvent* event) {
+  auto f = streams.find(detail::normalizeTopic(m.topic()));
   if (f == streams.end()) return false;
   Stream& s = f->second;
   const std::size_t index = s.messages++;
   try {
     switch (s.type) {
       case Stream::Type::kImu: {
-        const auto msg = m.instantiate<sensor_msgs::Imu>();
-        if (!msg) throw std::runtime_error("type " + m.getDataType() + " / md5 " + m.getMD5Sum() + " is not sensor_msgs/Imu");
+        const auto msg = m.template instantiate<sensor_msgs::Imu>();
+        if (!msg) throw std::runtime_error("md5 " + m.md5() + " is not sensor_msgs/Imu");
         event->kind = SensorEvent::Kind::kImu;
         event->imu = decodeImu(*msg, acc_scale);
         ++imu_count;
@@ -185,16 +282,16 @@ bool BagSource::Impl::decodeMessage(const rosbag::MessageInstance& m, SensorEven
         DecodeStats& st = stats[decode[li].sensor];
         LidarScan scan;
         if (s.type == Stream::Type::kCloud) {
-          const auto msg = m.instantiate<sensor_msgs::PointCloud2>();
-          if (!msg) throw std::runtime_error("md5 " + m.getMD5Sum() + " is not sensor_msgs/PointCloud2");
+          const auto msg = m.template instantiate<sensor_msgs::PointCloud2>();
+          if (!msg) throw std::runtime_error("md5 " + m.md5() + " is not sensor_msgs/PointCloud2");
           try {
             scan = decodePointCloud2(*msg, decode[li], &st);
           } catch (const Error& e) {
             throw Error("topic " + s.topic + " message " + std::to_string(index) + " in " + path + ": " + e.what());
           }
         } else {
-          const auto msg = m.instantiate<LivoxCustomMsg>();
-          if (!msg) throw std::runtime_error("md5 " + m.getMD5Sum() + " is not " + kLivoxCustomMsgType);
+          const auto msg = m.template instantiate<LivoxCustomMsg>();
+          if (!msg) throw std::runtime_error("md5 " + m.md5() + " is not " + kLivoxCustomMsgType);
           scan = decodeLivox(*msg, decode[li], &st);
         }
         if (scan.points.empty()) return false;
@@ -218,12 +315,18 @@ bool BagSource::Impl::decodeMessage(const rosbag::MessageInstance& m, SensorEven
 
 bool BagSource::next(SensorEvent* event) {
   Impl& d = *impl_;
-  if (d.done || !d.view) return false;
+  if (d.done || (!d.view && !d.raw)) return false;
   try {
+    if (d.raw) {
+      if (d.nextRaw(event)) return true;
+      d.done = true;
+      d.current_ns = d.end_ns;
+      return false;
+    }
     while (d.it != d.view->end()) {
       const rosbag::MessageInstance& m = *d.it;
       d.current_ns = toNs(m.getTime());
-      const bool got = d.decodeMessage(m, event);
+      const bool got = d.decodeMessage(IndexedMessage{m}, event);
       ++d.it;
       if (got) return true;
     }

@@ -41,10 +41,15 @@ std::string guessImuUnit(rosbag::Bag& bag, const std::string& topic) {
 }
 
 double imuAccScale(rosbag::Bag& bag, const std::string& topic, const std::string& acc_unit, const std::string& path) {
+  return imuAccScaleFromMean([&] { return meanImuAccNorm(bag, topic); }, topic, acc_unit, path);
+}
+
+double imuAccScaleFromMean(const std::function<double()>& mean_fn, const std::string& topic,
+                           const std::string& acc_unit, const std::string& path) {
   if (acc_unit == "g") return kStandardGravity;
   if (acc_unit == "m/s2") return 1.0;
   if (acc_unit != "auto") throw Error("imu.acc_unit '" + acc_unit + "' is not auto, g or m/s2");
-  const double mean = meanImuAccNorm(bag, topic);
+  const double mean = mean_fn();
   if (mean < 0) {
     log::warn("cannot guess the IMU acceleration unit of ", topic, " in ", path, ": no readable message; assuming m/s^2");
     return 1.0;

@@ -2,6 +2,7 @@
 // Private helper of src/io: which unit an IMU topic reports its acceleration in.
 #include <rosbag/bag.h>
 
+#include <functional>
 #include <string>
 
 namespace mmlio::io {
@@ -19,5 +20,8 @@ std::string guessImuUnit(rosbag::Bag& bag, const std::string& topic);
 /// Multiplier to m/s^2 for acc_unit "g" (9.80665), "m/s2" (1) or "auto" (guessed; 1 with a
 /// warning when it cannot be). Throws mmlio::Error naming `path` for another unit.
 double imuAccScale(rosbag::Bag& bag, const std::string& topic, const std::string& acc_unit, const std::string& path);
+/// Same from an already computed mean |acc| (negative: none); `mean` is only called for "auto".
+double imuAccScaleFromMean(const std::function<double()>& mean, const std::string& topic, const std::string& acc_unit,
+                           const std::string& path);
 
 }  // namespace mmlio::io

@@ -60,11 +60,14 @@ ImuSample imuAt(Stamp t) {
 std::string writeRigBag() {
   const std::string path = tempPath("rig.bag");
   BagWriter w(path);
-  for (int k = 0; k < 100; ++k) w.writeImu("/livox/imu", "imu", imuAt(kT0 + k * 10'000'000LL), true);
-  for (int k = 0; k < 10; ++k) {
-    w.writeVelodyneCloud("/velodyne_points", "velodyne", ringScan(kT0 + k * 100'000'000LL + 1, 50));
-    w.writeLivoxCloud("/livox/lidar", "livox", ringScan(kT0 + k * 100'000'000LL + 50'000'000LL, 30));
-    if (k % 2 == 0) w.writeLivoxCloud("/livox2/lidar", "livox", ringScan(kT0 + k * 100'000'000LL + 2, 20), true);
+  for (int k = 0; k < 100; ++k) {  // in recording order, as a real bag
+    w.writeImu("/livox/imu", "imu", imuAt(kT0 + k * 10'000'000LL), true);
+    const int j = k / 10;
+    if (k % 10 == 0) {
+      w.writeVelodyneCloud("/velodyne_points", "velodyne", ringScan(kT0 + j * 100'000'000LL + 1, 50));
+      if (j % 2 == 0) w.writeLivoxCloud("/livox2/lidar", "livox", ringScan(kT0 + j * 100'000'000LL + 2, 20), true);
+    }
+    if (k % 10 == 5) w.writeLivoxCloud("/livox/lidar", "livox", ringScan(kT0 + j * 100'000'000LL + 50'000'000LL, 30));
   }
   w.close();
   w.close();  // idempotent
@@ -232,11 +235,43 @@ TEST(BagSourceErrors, MissingFileNotABagAndTruncatedBagAreOneLineErrors) {
   const std::string full = writeRigBag();
   const std::string cut = tempPath("cut.bag");
   fs::copy_file(full, cut, fs::copy_options::overwrite_existing);
-  fs::resize_file(cut, fs::file_size(full) / 2);
+  fs::resize_file(cut, 4200);  // inside the first chunk: no complete message
   msg = errorOf([&] { BagSource(cut, rigOptions()); });
   EXPECT_NE(msg.find("rosbag reindex"), std::string::npos) << msg;
   EXPECT_NE(msg.find(cut), std::string::npos) << msg;
   EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+}
+
+TEST(BagSource, TruncatedBagIsReadUpToItsLastCompleteMessage) {
+  const std::string full = writeRigBag();
+  const std::string cut = tempPath("half.bag");
+  fs::copy_file(full, cut, fs::copy_options::overwrite_existing);
+  fs::resize_file(cut, fs::file_size(full) / 2);
+  BagSource src(cut, rigOptions());
+  EXPECT_TRUE(src.truncated());
+  EXPECT_DOUBLE_EQ(src.accScale(), kG);
+  EXPECT_EQ(src.beginNs(), kT0);
+  EXPECT_LT(src.endNs(), kT0 + 990'000'000LL);
+  SensorEvent e;
+  std::size_t events = 0, scans = 0;
+  Stamp last = 0;
+  while (src.next(&e)) {
+    ++events;
+    const Stamp t = e.kind == SensorEvent::Kind::kImu ? e.imu.stamp_ns : e.scan.start_ns;
+    EXPECT_GE(t, last);
+    last = t;
+    if (e.kind == SensorEvent::Kind::kLidar) {
+      ++scans;
+      const LidarScan expect = ringScan(e.scan.start_ns, static_cast<int>(e.scan.points.size()));
+      EXPECT_NEAR((e.scan.points.back().xyz - expect.points.back().xyz).norm(), 0.f, 1e-6f);
+    } else {
+      EXPECT_NEAR(e.imu.acc_m_s2.z(), kG, 1e-9);
+    }
+  }
+  EXPECT_GT(scans, 3u);
+  EXPECT_GT(events, 20u);
+  EXPECT_LT(events, 125u);  // the full bag has 100 IMU + 25 scans
+  EXPECT_DOUBLE_EQ(src.progress(), 1.0);
 }
 
 TEST(BagSourceErrors, MissingTopicIsNamedWithTheBagsTopics) {

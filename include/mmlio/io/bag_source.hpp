@@ -43,8 +43,10 @@ struct SensorEvent {
 
 class BagSource {
  public:
-  /// Opens and checks the bag. Throws mmlio::Error: missing file, not a bag, unindexed bag,
-  /// configured topic missing (listing the bag's topics), topic of an unexpected type.
+  /// Opens and checks the bag. A truncated or unindexed bag is read from its chunks up to the last
+  /// complete message, with one warning. Throws mmlio::Error: missing file, not a bag, nothing
+  /// readable (suggesting `rosbag reindex`), configured topic missing (listing the bag's topics),
+  /// topic of an unexpected type.
   BagSource(const std::string& path, const BagSourceOptions& options);
   ~BagSource();
   BagSource(const BagSource&) = delete;
@@ -62,7 +64,7 @@ class BagSource {
   const std::map<std::string, DecodeStats>& stats() const;  // per LiDAR name
   std::size_t imuCount() const;    // IMU samples delivered so far
   std::size_t skippedMessages() const;  // messages that failed to deserialise
-  bool truncated() const;          // the stream ended early on a read error
+  bool truncated() const;          // unindexed/truncated bag read from its chunks, or a read error ended the stream
 
  private:
   struct Impl;

@@ -1,0 +1,56 @@
+#pragma once
+// Private helper of src/io: reads the chunks of a ROS1 bag (format 2.0) record by record, without
+// its index, so that a truncated or unindexed bag (recording killed) can still be streamed up to
+// its last complete message. Uncompressed and lz4 chunks; a bz2 chunk ends the readable part.
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "mmlio/core/types.hpp"
+
+namespace mmlio::io::detail {
+
+struct RawConnection {
+  std::string topic, datatype, md5sum;
+};
+
+struct RawMessage {
+  std::uint32_t conn = 0;
+  Stamp time_ns = 0;
+  std::vector<std::uint8_t> data;  // serialised message
+};
+
+struct RawChunk {
+  std::uint64_t data_offset = 0;  // file offset of the chunk payload
+  std::uint64_t data_size = 0;    // bytes of payload present in the file
+  std::string compression;        // none | lz4
+  std::uint32_t uncompressed_size = 0;
+  Stamp begin_ns = 0, end_ns = 0;
+  std::size_t messages = 0;
+};
+
+class RawBagScanner {
+ public:
+  /// Scans every chunk once (connections, times, counts). Throws mmlio::Error when not a bag.
+  explicit RawBagScanner(const std::string& path);
+  const std::map<std::uint32_t, RawConnection>& connections() const { return connections_; }
+  const std::vector<RawChunk>& chunks() const { return chunks_; }
+  std::size_t messages() const;
+  Stamp beginNs() const;
+  Stamp endNs() const;
+  /// Messages of chunk i in time order.
+  std::vector<RawMessage> readChunk(std::size_t i) const;
+
+ private:
+  std::vector<std::uint8_t> chunkPayload(const RawChunk& c) const;
+  /// Parses the records of a chunk payload; complete records only.
+  static void parsePayload(const std::vector<std::uint8_t>& payload, std::vector<RawMessage>* messages,
+                           RawChunk* chunk, std::map<std::uint32_t, RawConnection>* connections);
+
+  std::string path_;
+  std::map<std::uint32_t, RawConnection> connections_;
+  std::vector<RawChunk> chunks_;
+};
+
+}  // namespace mmlio::io::detail
