@@ -18,7 +18,11 @@ int main(int argc, char** argv) {
                                   : (quiet ? mmlio::log::Level::kWarn : mmlio::log::Level::kInfo));
   });
 
+  mmlio::apps::registerInfoCommand(app);
+  mmlio::apps::registerSimulateCommand(app);
+  mmlio::apps::registerRunCommand(app);
   mmlio::apps::registerEvaluateCommand(app);
+  mmlio::apps::registerBenchCommand(app);
 
   try {
     app.parse(argc, argv);

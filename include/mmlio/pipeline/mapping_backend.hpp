@@ -1,0 +1,52 @@
+#pragma once
+// The mapping back end of a run: keyframe pose graph with loop closure over the odometry, the
+// trajectory corrected by it, and the high-resolution map built from per-keyframe submaps at
+// their corrected poses (each sweep's points are stored once, voxel-averaged, in the frame of
+// its keyframe, so memory grows with the mapped surface).
+#include <memory>
+#include <vector>
+
+#include "mmlio/backend/loop_closer.hpp"
+#include "mmlio/backend/pose_graph.hpp"
+#include "mmlio/estimator/odometry.hpp"
+#include "mmlio/pipeline/json.hpp"
+#include "mmlio/pipeline/map_accumulator.hpp"
+
+namespace mmlio::pipeline {
+
+class MappingBackend {
+ public:
+  struct Config {
+    bool loop_enabled = true;
+    backend::LoopCloser::Config loop;
+    double map_leaf_m = 0.05;            // output map resolution (0: every point)
+    double loop_cloud_voxel_m = 0.1;     // keyframe clouds kept for loop verification
+    int loop_check_every = 2;            // try loop detection on every n-th keyframe
+  };
+
+  explicit MappingBackend(Config cfg);
+  ~MappingBackend();
+
+  /// Every tracked sweep in order (keyframe sweeps open a new submap and graph node).
+  void addSweep(const estimator::SweepResult& sweep);
+
+  Trajectory correctedTrajectory() const;
+  std::vector<Point> map() const;
+  std::size_t keyframes() const;
+  std::size_t loops() const;
+  /// {keyframes, loop_attempts, loops: [{query_s, match_s, fitness_m, overlap}], rejected}
+  Json toJson() const;
+
+ private:
+  Config cfg_;
+  backend::PoseGraph graph_;
+  std::unique_ptr<backend::LoopCloser> closer_;
+  std::vector<std::unique_ptr<MapAccumulator>> submaps_;  // one per keyframe, keyframe frame
+  Trajectory odometry_;
+  Eigen::Isometry3d T_world_keyframe_ = Eigen::Isometry3d::Identity();
+  std::size_t loop_attempts_ = 0;
+  Json loops_ = Json::array();
+  std::size_t rejected_ = 0;
+};
+
+}  // namespace mmlio::pipeline

@@ -1,0 +1,83 @@
+#include "mmlio/pipeline/mapping_backend.hpp"
+
+#include "mmlio/backend/point_to_plane_icp.hpp"
+#include "mmlio/core/log.hpp"
+
+namespace mmlio::pipeline {
+
+MappingBackend::MappingBackend(Config cfg) : cfg_(std::move(cfg)) {
+  if (cfg_.loop_enabled) closer_ = std::make_unique<backend::LoopCloser>(cfg_.loop);
+}
+
+MappingBackend::~MappingBackend() = default;
+
+void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
+  const Eigen::Isometry3d T_world_body = sweep.state.pose();
+  odometry_.push_back({sweep.state.stamp_ns, T_world_body});
+  if (sweep.keyframe || submaps_.empty()) {
+    backend::KeyframeNode node;
+    node.stamp_ns = sweep.state.stamp_ns;
+    node.T_world_body_odom = T_world_body;
+    if (cfg_.loop_enabled) {
+      std::vector<Eigen::Vector3d> pts;
+      pts.reserve(sweep.points_body.size());
+      for (const Point& p : sweep.points_body) pts.push_back(p.xyz.cast<double>());
+      node.cloud_body = backend::voxelCentroids(pts, cfg_.loop_cloud_voxel_m);
+    }
+    const int k = graph_.addKeyframe(std::move(node));
+    submaps_.push_back(std::make_unique<MapAccumulator>(cfg_.map_leaf_m));
+    T_world_keyframe_ = T_world_body;
+
+    if (closer_ && k > 0 && k % std::max(1, cfg_.loop_check_every) == 0) {
+      ++loop_attempts_;
+      const backend::LoopResult r = closer_->detect(graph_, k);
+      if (r.accepted) {
+        graph_.addLoop(r.match, r.query, r.T_match_query, r.information);
+        graph_.optimize();
+        Json loop = Json::object();
+        loop["query_s"] = toSec(graph_.node(r.query).stamp_ns);
+        loop["match_s"] = toSec(graph_.node(r.match).stamp_ns);
+        loop["fitness_m"] = r.fitness_m;
+        loop["overlap"] = r.overlap;
+        loops_.push_back(loop);
+        log::emit(log::Level::kInfo, "loop closed: keyframe ", r.query, " -> ", r.match, " (fitness ", r.fitness_m,
+                  " m, overlap ", r.overlap, ")");
+      } else if (r.candidates_tried > 0) {
+        ++rejected_;
+        log::emit(log::Level::kDebug, "loop candidate rejected for keyframe ", k, ": ", r.reason);
+      }
+    }
+  }
+  // Points go into the current keyframe's submap, in that keyframe's frame.
+  submaps_.back()->add(sweep.points_body, T_world_keyframe_.inverse() * T_world_body);
+}
+
+Trajectory MappingBackend::correctedTrajectory() const {
+  if (graph_.loops() == 0) return odometry_;
+  Trajectory out;
+  out.reserve(odometry_.size());
+  for (const auto& p : odometry_) out.push_back({p.stamp_ns, graph_.correct(p.stamp_ns, p.T_world_body)});
+  return out;
+}
+
+std::vector<Point> MappingBackend::map() const {
+  MapAccumulator merged(cfg_.map_leaf_m);
+  for (std::size_t k = 0; k < submaps_.size(); ++k) merged.add(submaps_[k]->points(), graph_.pose(static_cast<int>(k)));
+  return merged.points();
+}
+
+std::size_t MappingBackend::keyframes() const { return graph_.size(); }
+std::size_t MappingBackend::loops() const { return graph_.loops(); }
+
+Json MappingBackend::toJson() const {
+  Json j = Json::object();
+  j["enabled"] = cfg_.loop_enabled;
+  j["keyframes"] = graph_.size();
+  j["loop_attempts"] = loop_attempts_;
+  j["loops_accepted"] = graph_.loops();
+  j["candidates_rejected"] = rejected_;
+  j["loops"] = loops_;
+  return j;
+}
+
+}  // namespace mmlio::pipeline

@@ -1,0 +1,207 @@
+#include "mmlio/pipeline/runner.hpp"
+
+#include <cmath>
+#include <limits>
+#include <filesystem>
+#include <map>
+#include <sstream>
+
+#include "mmlio/core/error.hpp"
+#include "mmlio/core/log.hpp"
+#include "mmlio/core/timer.hpp"
+#include "mmlio/estimator/odometry.hpp"
+#include "mmlio/io/bag_source.hpp"
+#include "mmlio/io/pcd_io.hpp"
+#include "mmlio/io/trajectory_writer.hpp"
+#include "mmlio/pipeline/online_pipeline.hpp"
+#include "mmlio/pipeline/mapping_backend.hpp"
+#include "mmlio/pipeline/progress.hpp"
+#include "mmlio/pipeline/report.hpp"
+
+namespace mmlio::pipeline {
+namespace {
+
+/// Running per-LiDAR figures for the report.
+struct LidarTally {
+  std::size_t sweeps = 0, points = 0, edges = 0, planes = 0, bad_frames = 0;
+};
+
+Json vec3(const Eigen::Vector3d& v) {
+  Json a = Json::array();
+  for (int i = 0; i < 3; ++i) a.push_back(v[i]);
+  return a;
+}
+
+}  // namespace
+
+RunResult runBag(const RunOptions& options) {
+  const io::RigConfig& cfg = options.config;
+  const std::string mode = options.mode.empty() ? cfg.mode : options.mode;
+  if (!io::isValidMode(mode)) throw Error("unknown mode '" + mode + "' (expected hvi, vi or hi)");
+
+  io::BagSource source(options.bag_path, io::bagSourceOptions(cfg, mode));
+  MappingBackend::Config mb;
+  mb.loop_enabled = cfg.loop.enabled;
+  mb.loop.search_radius_m = cfg.loop.search_radius_m;
+  mb.loop.min_time_gap_s = cfg.loop.min_time_gap_s;
+  mb.loop.max_fitness_m = cfg.loop.max_fitness_m;
+  mb.loop.min_overlap = cfg.loop.min_overlap;
+  mb.map_leaf_m = cfg.output.map_voxel_m;
+  MappingBackend mapping(mb);
+
+  RunResult result;
+  std::map<std::string, LidarTally> tally;
+  std::size_t tracked = 0, degraded = 0, initialising = 0;
+  auto onSweep = [&](const estimator::SweepResult& r) {
+    if (r.status == estimator::SweepResult::Status::kInitializing) {
+      ++initialising;
+      return;
+    }
+    if (r.status == estimator::SweepResult::Status::kDegraded) ++degraded;
+    else ++tracked;
+    Stopwatch t;
+    result.trajectory.push_back({r.state.stamp_ns, r.state.pose()});
+    mapping.addSweep(r);
+    StageTimes times = r.times_ms;
+    times.emplace_back("mapping_backend", t.lapMs());
+    result.timing.add(times);
+    for (const auto& l : r.lidars) {
+      LidarTally& lt = tally[l.sensor];
+      ++lt.sweeps;
+      lt.points += l.points;
+      lt.edges += l.edges;
+      lt.planes += l.planes;
+      lt.bad_frames += l.bad_frame ? 1 : 0;
+    }
+  };
+  OnlinePipeline online(cfg, mode, onSweep);
+  const estimator::Odometry& odometry = online.odometry();
+  ProgressBar progress("mmlio run", options.progress);
+  Stopwatch wall;
+
+  const Stamp stop_ns = options.max_duration_s > 0 ? source.beginNs() + fromSec(options.max_duration_s)
+                                                   : std::numeric_limits<Stamp>::max();
+  try {
+    io::SensorEvent event;
+    std::size_t events = 0;
+    while (source.next(&event)) {
+      if (event.kind == io::SensorEvent::Kind::kImu) {
+        if (event.imu.stamp_ns > stop_ns) break;
+        online.addImu(event.imu);
+      } else {
+        online.addScan(std::move(event.scan));
+      }
+      if (++events % 50 == 0) {
+        std::ostringstream status;
+        const double bag_s = toSec(odometry.lastImuNs() - source.beginNs());
+        status.precision(3);
+        status << online.sweepsProcessed() << " sweeps, " << odometry.keyframes() << " kf, "
+               << bag_s / std::max(1e-3, wall.elapsedMs() * 1e-3) << "x rt";
+        progress.update(source.progress(), status.str());
+      }
+    }
+    online.flush();
+  } catch (const Error& e) {
+    if (result.trajectory.empty()) throw;
+    result.complete = false;
+    result.error = e.what();
+    log::emit(log::Level::kError, "stopped early: ", e.what(), " (writing the ", result.trajectory.size(),
+              " poses computed so far)");
+  }
+  const std::size_t sweeps = online.sweepsProcessed();
+  const double wall_s = wall.elapsedMs() * 1e-3;
+  progress.finish(std::to_string(sweeps) + " sweeps, " + std::to_string(result.trajectory.size()) + " poses");
+
+  if (result.trajectory.empty() && result.complete) {
+    throw Error(odometry.initialized()
+                    ? "no sweep could be tracked in " + options.bag_path
+                    : "IMU initialisation never succeeded in " + options.bag_path + ": " + odometry.imuInit().message);
+  }
+
+  // ---- report ----
+  Json& rep = result.report;
+  rep = Json::object();
+  rep["status"] = result.complete ? "complete" : "incomplete: " + result.error;
+  Json input = Json::object();
+  input["bag"] = options.bag_path;
+  input["config"] = cfg.source_path;
+  input["mode"] = mode;
+  input["bag_duration_s"] = toSec(source.endNs() - source.beginNs());
+  input["imu_messages"] = source.imuCount();
+  input["imu_acc_scale"] = source.accScale();
+  input["skipped_messages"] = source.skippedMessages();
+  input["truncated"] = source.truncated();
+  Json lidars_in = Json::object();
+  for (const auto& [name, st] : source.stats()) {
+    Json s = Json::object();
+    s["points_kept"] = st.kept;
+    s["dropped_nan"] = st.dropped_nan;
+    s["dropped_zero"] = st.dropped_zero;
+    s["dropped_range"] = st.dropped_range;
+    lidars_in[name] = s;
+  }
+  input["decoded"] = lidars_in;
+  rep["input"] = input;
+
+  const auto& init = odometry.imuInit();
+  Json imu = Json::object();
+  imu["ok"] = init.ok;
+  imu["gravity_norm_m_s2"] = init.gravity_norm_m_s2;
+  imu["gyro_bias_rad_s"] = vec3(init.gyro_bias);
+  imu["acc_scale"] = source.accScale();
+  imu["message"] = init.message;
+  rep["imu_init"] = imu;
+
+  Json sw = Json::object();
+  sw["processed"] = sweeps;
+  sw["tracked"] = tracked;
+  sw["degraded"] = degraded;
+  sw["initialising"] = initialising;
+  sw["keyframes"] = odometry.keyframes();
+  rep["sweeps"] = sw;
+
+  Json per_lidar = Json::object();
+  for (const auto& [name, t] : tally) {
+    Json l = Json::object();
+    const double n = std::max<std::size_t>(t.sweeps, 1);
+    l["sweeps"] = t.sweeps;
+    l["mean_points"] = t.points / n;
+    l["mean_edges"] = t.edges / n;
+    l["mean_planes"] = t.planes / n;
+    l["bad_frames"] = t.bad_frames;
+    per_lidar[name] = l;
+  }
+  rep["features"] = per_lidar;
+  rep["timing"] = result.timing.toJson();
+  rep["wall_time_s"] = wall_s;
+  rep["realtime_factor"] = wall_s > 0 ? toSec(odometry.lastImuNs() - source.beginNs()) / wall_s : 0.0;
+
+  rep["mapping"] = mapping.toJson();
+
+  // ---- outputs ----
+  result.trajectory = mapping.correctedTrajectory();
+  const std::vector<Point> map_points = mapping.map();
+  result.map_points = map_points.size();
+  if (!options.out_dir.empty()) {
+    namespace fs = std::filesystem;
+    fs::create_directories(options.out_dir);
+    const std::string dir = options.out_dir + "/";
+    io::writeTum(dir + "trajectory.tum", result.trajectory);
+    if (cfg.output.write_kitti) {
+      io::writeKitti(dir + "trajectory.kitti", result.trajectory);
+      io::writeKittiTimes(dir + "times.txt", result.trajectory);
+    }
+    io::writePcdBinary(dir + "map.pcd", map_points);
+    Json out = Json::object();
+    out["trajectory"] = dir + "trajectory.tum";
+    out["poses"] = result.trajectory.size();
+    out["map"] = dir + "map.pcd";
+    out["map_points"] = map_points.size();
+    out["map_voxel_m"] = cfg.output.map_voxel_m;
+    rep["outputs"] = out;
+    writeReports(dir, rep, result.trajectory, map_points, options.gt_path);
+  }
+  return result;
+}
+
+}  // namespace mmlio::pipeline
