@@ -14,8 +14,9 @@ pipeline::Json toJson(const io::BagInfo& info) {
   using pipeline::Json;
   Json j = Json::object();
   j["path"] = info.path;
-  j["begin_s"] = toSec(info.begin_ns);
-  j["end_s"] = toSec(info.end_ns);
+  // Strings: pipeline::Json keeps numbers as double, which would lose the nanoseconds.
+  j["begin_ns"] = std::to_string(info.begin_ns);
+  j["end_ns"] = std::to_string(info.end_ns);
   j["duration_s"] = toSec(info.end_ns - info.begin_ns);
   j["imu_unit_guess"] = info.imu_unit_guess;
   Json topics = Json::array();
