@@ -49,7 +49,10 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
     }
   }
   // Points go into the current keyframe's submap, in that keyframe's frame.
-  submaps_.back()->add(sweep.points_body, T_world_keyframe_.inverse() * T_world_body);
+  const std::size_t stride = static_cast<std::size_t>(std::max(1, cfg_.map_point_stride));
+  strided_.clear();
+  for (std::size_t i = sweeps_++ % stride; i < sweep.points_body.size(); i += stride) strided_.push_back(sweep.points_body[i]);
+  submaps_.back()->add(strided_, T_world_keyframe_.inverse() * T_world_body);
 }
 
 Trajectory MappingBackend::correctedTrajectory() const {

@@ -41,10 +41,10 @@ struct OdometryConfig {
   int max_iterations = 10;              // solver iterations per optimisation
   double huber_loss_m = 0.1;            // robust loss scale of point-to-edge/plane residuals
   double lidar_sigma_m = 0.05;          // point-to-map residual standard deviation
-  int match_rounds = 3;
+  int match_rounds = 2;                 // correspondence re-association rounds per sweep
   double prior_sigma_v_m_s = 0.05;      // registration: how far the previous sweep's velocity may move
   double prior_sigma_ba = 0.005;        // ... its accelerometer bias, m/s^2
-  double prior_sigma_bg = 0.0005;       // ... its gyroscope bias, rad/s                 // correspondence re-association rounds per sweep
+  double prior_sigma_bg = 0.0005;       // ... its gyroscope bias, rad/s
   bool keep_points = true;              // return de-skewed points for the map
 };
 

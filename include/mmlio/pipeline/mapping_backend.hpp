@@ -21,7 +21,9 @@ class MappingBackend {
     backend::LoopCloser::Config loop;
     double map_leaf_m = 0.05;            // output map resolution (0: every point)
     double loop_cloud_voxel_m = 0.1;     // keyframe clouds kept for loop verification
-    int loop_check_every = 2;            // try loop detection on every n-th keyframe
+    int loop_check_every = 4;            // try loop detection on every n-th keyframe
+    int map_point_stride = 4;            // each sweep adds every n-th point (offset rotates per sweep):
+                                         // overlapping sweeps still fill every voxel, at 1/n the cost
   };
 
   explicit MappingBackend(Config cfg);
@@ -47,6 +49,8 @@ class MappingBackend {
   std::size_t loop_attempts_ = 0;
   Json loops_ = Json::array();
   std::size_t rejected_ = 0;
+  std::size_t sweeps_ = 0;
+  std::vector<Point> strided_;  // scratch
 };
 
 }  // namespace mmlio::pipeline
