@@ -21,6 +21,11 @@ class Preintegration {
  public:
   Preintegration(const ImuBias& bias_lin, const ImuNoise& noise);
 
+  /// One raw measurement taken dt_s after the previous one (VINS-style push): the interval is
+  /// integrated with the previous and this measurement at its ends (midpoint rule). Without a
+  /// previous measurement this one is held over the interval; pass dt_s = 0 to only record the
+  /// measurement at the start of the interval.
+  void integrate(double dt_s, const Eigen::Vector3d& acc, const Eigen::Vector3d& gyro);
   /// One interval of dt_s between two raw measurements (midpoint rule).
   void integrate(double dt_s, const Eigen::Vector3d& acc0, const Eigen::Vector3d& gyro0, const Eigen::Vector3d& acc1,
                  const Eigen::Vector3d& gyro1);
@@ -59,6 +64,8 @@ class Preintegration {
   Eigen::Vector3d dp_, dv_;
   Eigen::Quaterniond dq_;
   Matrix15d cov_, jac_;
+  bool has_last_ = false;  // last raw measurement, the start of the next single-sample push
+  Eigen::Vector3d last_acc_ = Eigen::Vector3d::Zero(), last_gyro_ = Eigen::Vector3d::Zero();
 };
 
 }  // namespace mmlio::imu
