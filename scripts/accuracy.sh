@@ -9,7 +9,7 @@ OUT="${1:-accuracy_out}"
 shift || true
 SCENARIOS=("${@:-office corridor hall}")
 read -r -a SCENARIOS <<< "${SCENARIOS[*]}"
-MMLIO=build/mmlio
+MMLIO="${MMLIO:-build/mmlio}"
 [ -x "$MMLIO" ] || scripts/build.sh --target mmlio
 
 echo "| scenario | path m | run | ATE RMSE m | RPE 10 m % | end-to-end m | end-to-end % of path | ms/sweep (odometry) |"
