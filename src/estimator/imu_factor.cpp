@@ -27,6 +27,19 @@ Eigen::Matrix4d qRight(const Quaterniond& q) {
   return m;
 }
 
+// d(2 vec(e)) / dx for e = c^-1 * dq^-1 * q_ij with c = normalize(1, x/2), x = dq_dbg (bg - bg_lin):
+// the exact derivative of the first-order bias correction Preintegration::corrected() applies
+// (chain with dx/dbg = dq_dbg).
+Matrix3d rotationResidualByGyroBias(const Quaterniond& dq, const Quaterniond& q_ij, const Vector3d& x) {
+  // c^-1 = u / |u| with u = (1, -x/2) in (w, x, y, z) order.
+  const Eigen::Vector4d u(1.0, -0.5 * x.x(), -0.5 * x.y(), -0.5 * x.z());
+  const double n = u.norm();
+  Eigen::Matrix<double, 4, 3> du_dx = Eigen::Matrix<double, 4, 3>::Zero();
+  du_dx.bottomRows<3>() = -0.5 * Matrix3d::Identity();
+  const Eigen::Matrix4d dnormalized = (Eigen::Matrix4d::Identity() - u * u.transpose() / (n * n)) / n;
+  return 2.0 * (qRight(dq.inverse() * q_ij) * dnormalized * du_dx).bottomRows<3>();
+}
+
 constexpr int kP = 0, kR = 3, kV = 6, kBa = 9, kBg = 12;
 
 }  // namespace
@@ -50,6 +63,7 @@ bool ImuFactor::Evaluate(double const* const* parameters, double* residuals, dou
   const Matrix3d dp_dba = J.block<3, 3>(kP, kBa), dp_dbg = J.block<3, 3>(kP, kBg);
   const Matrix3d dq_dbg = J.block<3, 3>(kR, kBg);
   const Matrix3d dv_dba = J.block<3, 3>(kV, kBa), dv_dbg = J.block<3, 3>(kV, kBg);
+  const Vector3d bg_lin = pre_->biasLin().gyro_rad_s;
 
   ImuBias bi;
   bi.acc_m_s2 = Bai;
@@ -76,7 +90,9 @@ bool ImuFactor::Evaluate(double const* const* parameters, double* residuals, dou
     j.setZero();
     j.block<3, 3>(kP, 0) = -Ri_inv;
     j.block<3, 3>(kP, 3) = so3::hat(Ri_inv * dpos);
-    j.block<3, 3>(kR, 3) = -(qLeft(Qj.inverse() * Qi) * qRight(cq)).bottomRightCorner<3, 3>();
+    // e(theta) = cq^-1 * Exp(-theta) * Qi^-1 * Qj, differentiated directly (same value as VINS's
+    // -[L(Qj^-1 Qi) R(cq)] form, which uses vec(e) = -vec(e^-1)).
+    j.block<3, 3>(kR, 3) = -(qLeft(cq.inverse()) * qRight(Qi.inverse() * Qj)).bottomRightCorner<3, 3>();
     j.block<3, 3>(kV, 3) = so3::hat(Ri_inv * dvel);
     j = sqrt_info_ * j;
   }
@@ -86,7 +102,7 @@ bool ImuFactor::Evaluate(double const* const* parameters, double* residuals, dou
     j.block<3, 3>(kP, 0) = -Ri_inv * T;
     j.block<3, 3>(kP, 3) = -dp_dba;
     j.block<3, 3>(kP, 6) = -dp_dbg;
-    j.block<3, 3>(kR, 6) = -qLeft(Qj.inverse() * Qi * pre_->deltaQ()).bottomRightCorner<3, 3>() * dq_dbg;
+    j.block<3, 3>(kR, 6) = rotationResidualByGyroBias(pre_->deltaQ(), Qi.inverse() * Qj, dq_dbg * (Bgi - bg_lin)) * dq_dbg;
     j.block<3, 3>(kV, 0) = -Ri_inv;
     j.block<3, 3>(kV, 3) = -dv_dba;
     j.block<3, 3>(kV, 6) = -dv_dbg;
