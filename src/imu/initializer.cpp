@@ -1,9 +1,9 @@
 #include "mmlio/imu/initializer.hpp"
 
 #include <cmath>
+#include <algorithm>
 #include <cstdio>
 #include <vector>
-#include <algorithm>
 
 namespace mmlio::imu {
 
@@ -51,40 +51,72 @@ ImuInitializer::WindowStats ImuInitializer::stats() const {
   return s;
 }
 
+std::string ImuInitializer::notStillReason(const WindowStats& s) const {
+  char buf[160];
+  if (s.span_s < 0.95 * cfg_.duration_s) {
+    std::snprintf(buf, sizeof(buf), "window %.2f s of %.1f s", s.span_s, cfg_.duration_s);
+    return buf;
+  }
+  if (s.gyro_std > cfg_.max_gyro_std_rad_s) {
+    std::snprintf(buf, sizeof(buf), "turning: gyro std %.3f > %.3f rad/s", s.gyro_std, cfg_.max_gyro_std_rad_s);
+    return buf;
+  }
+  // The threshold is in m/s^2 also when the data are in g.
+  const double acc_std_m_s2 = s.acc_std * (s.mean_acc.norm() < 3.0 ? 9.80665 : 1.0);
+  if (acc_std_m_s2 > cfg_.max_acc_std_m_s2) {
+    std::snprintf(buf, sizeof(buf), "accelerating: acc std %.3f > %.3f m/s^2", acc_std_m_s2, cfg_.max_acc_std_m_s2);
+    return buf;
+  }
+  if (s.mean_gyro.norm() > cfg_.max_gyro_bias_rad_s) {
+    std::snprintf(buf, sizeof(buf), "turning steadily: mean gyro %.3f > %.3f rad/s", s.mean_gyro.norm(),
+                  cfg_.max_gyro_bias_rad_s);
+    return buf;
+  }
+  const double g = s.mean_acc.norm();
+  const double tol = cfg_.max_gravity_norm_error;
+  if (std::abs(g / 9.81 - 1.0) > tol && std::abs(g - 1.0) > tol) {
+    std::snprintf(buf, sizeof(buf), "|mean acc| %.3f looks like neither 9.81 m/s^2 nor 1 g", g);
+    return buf;
+  }
+  return {};
+}
+
 bool ImuInitializer::ready() const {
   if (window_.size() < 10) return false;
-  const WindowStats s = stats();
   if (toSec(window_.back().stamp_ns - first_ns_) >= cfg_.force_after_s) return true;
-  return s.span_s >= 0.95 * cfg_.duration_s && s.gyro_std <= cfg_.max_gyro_std_rad_s &&
-         s.acc_std <= cfg_.max_acc_std_m_s2;
+  return notStillReason(stats()).empty();
 }
 
 ImuInitResult ImuInitializer::result() const {
   ImuInitResult r;
   const WindowStats s = stats();
+  const std::string not_still = window_.size() < 10 ? "too few samples" : notStillReason(s);
   char buf[256];
   if (!ready()) {
     std::snprintf(buf, sizeof(buf),
-                  "waiting for %.1f s at rest (window %.2f s, gyro std %.3f rad/s, acc std %.3f m/s^2)",
-                  cfg_.duration_s, s.span_s, s.gyro_std, s.acc_std);
+                  "waiting for %.1f s at rest: %s (window %.2f s, gyro std %.3f rad/s, acc std %.3f m/s^2)",
+                  cfg_.duration_s, not_still.c_str(), s.span_s, s.gyro_std, s.acc_std);
     r.message = buf;
     return r;
   }
-  const bool still = s.gyro_std <= cfg_.max_gyro_std_rad_s && s.acc_std <= cfg_.max_acc_std_m_s2;
+  const bool still = not_still.empty();
   r.ok = true;
   r.forced = !still;
-  r.gravity_norm_m_s2 = s.mean_acc.norm();
-  r.acc_scale = r.gravity_norm_m_s2 < 3.0 ? 9.80665 : 1.0;
+  r.acc_scale = s.mean_acc.norm() < 3.0 ? 9.80665 : 1.0;
+  r.gravity_norm_m_s2 = s.mean_acc.norm() * r.acc_scale;
   r.gyro_bias = still ? s.mean_gyro : Eigen::Vector3d::Zero();
   // At rest the accelerometer measures -g, i.e. "up": rotate it onto +z, then remove the yaw.
   const Eigen::Quaterniond q = Eigen::Quaterniond::FromTwoVectors(s.mean_acc, Eigen::Vector3d::UnitZ());
   const Eigen::Matrix3d R = q.toRotationMatrix();
   const double yaw = std::atan2(R(1, 0), R(0, 0));
   r.q_world_imu = (Eigen::AngleAxisd(-yaw, Eigen::Vector3d::UnitZ()) * q).normalized();
-  const Eigen::Vector3d rpy = r.q_world_imu.toRotationMatrix().eulerAngles(2, 1, 0);
-  std::snprintf(buf, sizeof(buf), "%s|g|=%.3f m/s^2, gyro bias (%.4f %.4f %.4f) rad/s, roll %.2f pitch %.2f deg",
-                still ? "" : "rig never still, forced: ", r.gravity_norm_m_s2, r.gyro_bias.x(), r.gyro_bias.y(),
-                r.gyro_bias.z(), rpy[2] * 180 / M_PI, rpy[1] * 180 / M_PI);
+  const Eigen::Matrix3d Rw = r.q_world_imu.toRotationMatrix();
+  const double roll_deg = std::atan2(Rw(2, 1), Rw(2, 2)) * 180.0 / M_PI;
+  const double pitch_deg = -std::asin(std::clamp(Rw(2, 0), -1.0, 1.0)) * 180.0 / M_PI;
+  const std::string prefix = still ? "" : "rig never still (" + not_still + "), forced: ";
+  std::snprintf(buf, sizeof(buf), "%s|g|=%.3f m/s^2 (acc scale %.5f), gyro bias (%.4f %.4f %.4f) rad/s, roll %.2f pitch %.2f deg",
+                prefix.c_str(), r.gravity_norm_m_s2, r.acc_scale, r.gyro_bias.x(), r.gyro_bias.y(), r.gyro_bias.z(),
+                roll_deg, pitch_deg);
   r.message = buf;
   return r;
 }
