@@ -3,6 +3,8 @@
 #include <cstdlib>
 
 #include "mmlio/eval/evaluation.hpp"
+#include "mmlio/pipeline/map_accumulator.hpp"
+#include <algorithm>
 #include "sim_feed.hpp"
 
 namespace mmlio {
@@ -10,6 +12,7 @@ namespace {
 
 struct SimRun {
   Trajectory trajectory;
+  std::vector<double> map_error_m;  // |distance to the true surface| of map points (2 cm voxels)
   eval::EvalResult eval;
   std::size_t degraded = 0;
 };
@@ -20,10 +23,12 @@ SimRun runSimulated(const std::string& scenario, double duration_s, const std::s
   so.duration_s = duration_s;
   sim::Simulator sim(so);
   SimRun run;
+  pipeline::MapAccumulator map(0.02);
   pipeline::OnlinePipeline online(testing::simRigConfig(sim), mode, [&](const estimator::SweepResult& r) {
     if (r.status == estimator::SweepResult::Status::kInitializing) return;
     if (r.status == estimator::SweepResult::Status::kDegraded) ++run.degraded;
     run.trajectory.push_back({r.state.stamp_ns, r.state.pose()});
+    map.add(r.points_body, r.state.pose());
     if (std::getenv("MMLIO_SIM_DEBUG")) {
       const NavState t = sim.trueState(r.state.stamp_ns);
       std::printf("%.2f kf%d corr %zu p (%.3f %.3f %.3f) true (%.3f %.3f %.3f) v %.2f truev %.2f ba %.3f %.3f %.3f %s ms:",
@@ -38,6 +43,15 @@ SimRun runSimulated(const std::string& scenario, double duration_s, const std::s
   });
   testing::replay(sim, online);
   run.eval = eval::evaluate(sim.groundTruth(), run.trajectory);
+  // Map quality: every map voxel brought into the true world should sit on a scene surface. The
+  // estimate's world is anchored to the truth at the first pose (as the estimator anchors it),
+  // not by a trajectory fit whose yaw is weak on a short walk.
+  const Eigen::Isometry3d T_gt_est =
+      sim.trueState(run.trajectory.front().stamp_ns).pose() * run.trajectory.front().T_world_body.inverse();
+  for (const Point& p : map.points()) {
+    run.map_error_m.push_back(sim.scene().distanceToSurface(T_gt_est * p.xyz.cast<double>()));
+  }
+  std::sort(run.map_error_m.begin(), run.map_error_m.end());
   return run;
 }
 
@@ -52,6 +66,13 @@ TEST(OdometryOnSimulation, HviTracksTheOfficeWalkToCentimetres) {
   const SimRun run = runSimulated(scenario, seconds, mode);
   std::printf("%s %s %.0f s: %zu poses, ATE %.4f m, RPE %.3f %%, e2e %.3f m, degraded %zu\n", scenario.c_str(), mode.c_str(), seconds,
               run.trajectory.size(), run.eval.ate_rmse_m, run.eval.rpe_10m_pct, run.eval.end_to_end_m, run.degraded);
+  const auto& e = run.map_error_m;
+  ASSERT_FALSE(e.empty());
+  const double median = e[e.size() / 2], p90 = e[e.size() * 9 / 10];
+  std::printf("map: %zu voxels of 2 cm, distance to the true surfaces: median %.1f mm, p90 %.1f mm\n", e.size(),
+              1e3 * median, 1e3 * p90);
+  EXPECT_LT(median, 0.015);  // measured 10 mm: range noise 1.5-2 cm, pose error ~1 cm
+  EXPECT_LT(p90, 0.05);     // measured 34 mm
   EXPECT_GT(run.eval.coverage, 0.8);
   EXPECT_LT(run.eval.ate_rmse_m, 0.05);
   EXPECT_EQ(run.degraded, 0u);
