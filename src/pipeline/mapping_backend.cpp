@@ -11,6 +11,22 @@ MappingBackend::MappingBackend(Config cfg) : cfg_(std::move(cfg)) {
 
 MappingBackend::~MappingBackend() = default;
 
+bool MappingBackend::plausibleCorrection(const backend::LoopResult& r) const {
+  // A loop may only correct what odometry can have drifted since the match: a place-descriptor
+  // match in a repetitive scene (a corridor's far end looking like its start) otherwise pulls
+  // the graph by tens of metres.
+  double path_m = 0.0;
+  for (int i = r.match + 1; i <= r.query; ++i)
+    path_m += (graph_.node(i).T_world_body_odom.translation() - graph_.node(i - 1).T_world_body_odom.translation()).norm();
+  const Eigen::Isometry3d T_est = graph_.pose(r.match).inverse() * graph_.pose(r.query);
+  const double correction_m = (T_est.translation() - r.T_match_query.translation()).norm();
+  const double allowed_m = cfg_.max_loop_correction_base_m + cfg_.max_drift_fraction * path_m;
+  if (correction_m <= allowed_m) return true;
+  log::emit(log::Level::kInfo, "loop ", r.query, " -> ", r.match, " rejected: it would move the pose by ", correction_m,
+            " m, more than odometry can drift over ", path_m, " m (", allowed_m, " m)");
+  return false;
+}
+
 void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
   const Eigen::Isometry3d T_world_body = sweep.state.pose();
   odometry_.push_back({sweep.state.stamp_ns, T_world_body});
@@ -30,13 +46,18 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
 
     if (closer_ && k > 0 && k % std::max(1, cfg_.loop_check_every) == 0) {
       ++loop_attempts_;
-      const backend::LoopResult r = closer_->detect(graph_, k);
+      backend::LoopResult r = closer_->detect(graph_, k);
+      if (r.accepted && !plausibleCorrection(r)) {
+        r.accepted = false;
+        ++rejected_;
+      }
       if (r.accepted) {
         graph_.addLoop(r.match, r.query, r.T_match_query, r.information);
         graph_.optimize();
         Json loop = Json::object();
-        loop["query_s"] = toSec(graph_.node(r.query).stamp_ns);
-        loop["match_s"] = toSec(graph_.node(r.match).stamp_ns);
+        const Stamp t0 = graph_.node(0).stamp_ns;  // seconds since the first keyframe: readable
+        loop["query_s"] = toSec(graph_.node(r.query).stamp_ns - t0);
+        loop["match_s"] = toSec(graph_.node(r.match).stamp_ns - t0);
         loop["fitness_m"] = r.fitness_m;
         loop["overlap"] = r.overlap;
         loops_.push_back(loop);

@@ -22,6 +22,8 @@ class MappingBackend {
     double map_leaf_m = 0.05;            // output map resolution (0: every point)
     double loop_cloud_voxel_m = 0.1;     // keyframe clouds kept for loop verification
     int loop_check_every = 4;            // try loop detection on every n-th keyframe
+    double max_loop_correction_base_m = 0.3;  // a loop may move the pose by at most this ...
+    double max_drift_fraction = 0.02;         // ... plus this fraction of the path since the match
     int map_point_stride = 4;            // each sweep adds every n-th point (offset rotates per sweep):
                                          // overlapping sweeps still fill every voxel, at 1/n the cost
   };
@@ -40,6 +42,8 @@ class MappingBackend {
   Json toJson() const;
 
  private:
+  bool plausibleCorrection(const backend::LoopResult& r) const;
+
   Config cfg_;
   backend::PoseGraph graph_;
   std::unique_ptr<backend::LoopCloser> closer_;
