@@ -122,8 +122,7 @@ class Node {
     subs_.push_back(nh.subscribe<sensor_msgs::Imu>(
         cfg.imu.topic, 2000, [this](const sensor_msgs::Imu::ConstPtr& m) { enqueue(kImuClass, {m, {}, {}, 0}); },
         ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
-    ROS_INFO_STREAM("mmlio_node: mode " << mode_ << ", IMU " << cfg.imu.topic << " (sensor_msgs/Imu, acc unit "
-                                        << cfg.imu.acc_unit << ")");
+    log::info("mode ", mode_, ", IMU ", cfg.imu.topic, " (sensor_msgs/Imu, acc unit ", cfg.imu.acc_unit, ")");
     for (const io::LidarConfig* l : io::activeLidars(cfg, mode_)) subscribeLidar(nh, *l);
     worker_ = std::thread([this] { run(); });
   }
@@ -137,9 +136,8 @@ class Node {
   void finish() {
     queue_.close();
     if (worker_.joinable()) worker_.join();
-    ROS_INFO_STREAM("mmlio_node: " << pipeline_.sweepsProcessed() << " sweeps, " << trajectory_.size()
-                                   << " poses; dropped " << queue_.dropped(kImuClass) << " IMU and "
-                                   << queue_.dropped(kScanClass) << " LiDAR messages (queue full)");
+    log::info(pipeline_.sweepsProcessed(), " sweeps, ", trajectory_.size(), " poses; dropped ", queue_.dropped(kImuClass),
+              " IMU and ", queue_.dropped(kScanClass), " LiDAR messages (queue full)");
     writeOutputs();
   }
 
@@ -169,13 +167,13 @@ class Node {
       if (advertisedType(l.topic) == io::kLivox2CustomMsgType) ops.datatype = io::kLivox2CustomMsgType;
       ops.transport_hints = ros::TransportHints().tcpNoDelay();
       subs_.push_back(nh.subscribe(ops));
-      ROS_INFO_STREAM("mmlio_node: LiDAR '" << l.name << "' on " << l.topic << " (" << ops.datatype << ")");
+      log::info("LiDAR '", l.name, "' on ", l.topic, " (", ops.datatype, ")");
     } else {
       subs_.push_back(nh.subscribe<sensor_msgs::PointCloud2>(
           l.topic, 10,
           [this, index](const sensor_msgs::PointCloud2::ConstPtr& m) { enqueue(kScanClass, {{}, m, {}, index}); },
           ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
-      ROS_INFO_STREAM("mmlio_node: LiDAR '" << l.name << "' on " << l.topic << " (sensor_msgs/PointCloud2)");
+      log::info("LiDAR '", l.name, "' on ", l.topic, " (sensor_msgs/PointCloud2)");
     }
   }
 
@@ -194,14 +192,14 @@ class Node {
       try {
         process(m);
       } catch (const std::exception& e) {
-        ROS_ERROR_STREAM("mmlio_node: " << e.what());
+        log::error(e.what());
       }
     }
     try {
       for (const ImuSample& s : imu_gate_.release()) pipeline_.addImu(s);
       pipeline_.flush();
     } catch (const std::exception& e) {
-      ROS_ERROR_STREAM("mmlio_node: at shutdown: " << e.what());
+      log::error("at shutdown: ", e.what());
     }
   }
 
@@ -230,7 +228,9 @@ class Node {
   void onSweep(const estimator::SweepResult& r) {
     using Status = estimator::SweepResult::Status;
     if (r.status == Status::kInitializing) return;
-    if (r.status == Status::kDegraded) ROS_WARN_STREAM_THROTTLE(5.0, "mmlio_node: degraded sweep: " << r.note);
+    if (r.status == Status::kDegraded && ++degraded_ % 50 == 1) {
+      log::warn("degraded sweep (", degraded_, " so far): ", r.note);
+    }
     const Eigen::Isometry3d T_world_body = r.state.pose();
     trajectory_.push_back({r.state.stamp_ns, T_world_body});
     if (map_) map_->add(r.points_body, T_world_body);
@@ -248,7 +248,7 @@ class Node {
   void writeOutputs() {
     if (params_.out_dir.empty()) return;
     if (trajectory_.empty()) {
-      ROS_WARN_STREAM("mmlio_node: no pose was estimated; nothing written to " << params_.out_dir);
+      log::warn("no pose was estimated; nothing written to ", params_.out_dir);
       return;
     }
     try {
@@ -257,10 +257,9 @@ class Node {
       io::writeTum(tum, trajectory_);
       const std::vector<Point> points = map_->points();
       io::writePcdBinary(pcd, points);
-      ROS_INFO_STREAM("mmlio_node: wrote " << tum << " (" << trajectory_.size() << " poses) and " << pcd << " ("
-                                           << points.size() << " points)");
+      log::info("wrote ", tum, " (", trajectory_.size(), " poses) and ", pcd, " (", points.size(), " points)");
     } catch (const std::exception& e) {
-      ROS_ERROR_STREAM("mmlio_node: cannot write the outputs: " << e.what());
+      log::error("cannot write the outputs: ", e.what());
     }
   }
 
@@ -274,20 +273,26 @@ class Node {
   pipeline::OnlinePipeline pipeline_;
   std::optional<pipeline::MapAccumulator> map_;
   Trajectory trajectory_;
-  std::size_t keyframes_ = 0;
+  std::size_t keyframes_ = 0, degraded_ = 0;
   ros::Publisher pose_pub_, transform_pub_, cloud_pub_;
   std::vector<ros::Subscriber> subs_;
   std::thread worker_;
 };
 
-/// mmlio's logger (used by the pipeline) into rosconsole, so it reaches /rosout.
+/// mmlio's logger (the pipeline's and the node's messages) into rosconsole, so it reaches /rosout.
+/// ros::shutdown() also shuts rosconsole down: from then on the messages go to stderr.
 void routeLogToRosconsole() {
   log::configure(log::Level::kInfo, [](log::Level level, const std::string& msg) {
+    if (!ros::ok()) {  // shutting down: rosconsole may be gone already
+      static const char* names[] = {"debug", "info", "warn", "error", "error"};
+      std::cerr << "[" << names[static_cast<int>(level)] << "] mmlio_node: " << msg << "\n";
+      return;
+    }
     switch (level) {
-      case log::Level::kDebug: ROS_DEBUG_STREAM("mmlio: " << msg); break;
-      case log::Level::kInfo: ROS_INFO_STREAM("mmlio: " << msg); break;
-      case log::Level::kWarn: ROS_WARN_STREAM("mmlio: " << msg); break;
-      default: ROS_ERROR_STREAM("mmlio: " << msg); break;
+      case log::Level::kDebug: ROS_DEBUG_STREAM("mmlio_node: " << msg); break;
+      case log::Level::kInfo: ROS_INFO_STREAM("mmlio_node: " << msg); break;
+      case log::Level::kWarn: ROS_WARN_STREAM("mmlio_node: " << msg); break;
+      default: ROS_ERROR_STREAM("mmlio_node: " << msg); break;
     }
   });
 }
@@ -332,7 +337,6 @@ int main(int argc, char** argv) {
     ros::spin();  // until SIGINT / rosnode kill
     node.finish();
   } catch (const std::exception& e) {
-    ROS_FATAL_STREAM("mmlio_node: " << e.what());
     std::cerr << "mmlio_node: " << e.what() << "\n";
     return 1;
   }
