@@ -1,0 +1,148 @@
+// Helpers of mmlio_node that need no ROS master: the hand-off queue, the IMU unit gate and the
+// published cloud.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <string>
+
+#include "../bounded_queue.hpp"
+#include "../imu_unit_gate.hpp"
+#include "../ros_messages.hpp"
+#include "mmlio/core/error.hpp"
+
+namespace mmlio::ros_node {
+namespace {
+
+TEST(BoundedQueue, AFullClassDropsItsNewItemsButNotTheOtherClass) {
+  BoundedQueue<int, 2> q({3, 1});
+  EXPECT_TRUE(q.push(1, 100));
+  EXPECT_FALSE(q.push(1, 101));  // scan class full
+  for (int i = 0; i < 3; ++i) EXPECT_TRUE(q.push(0, i));
+  EXPECT_FALSE(q.push(0, 3));    // imu class full
+  EXPECT_EQ(q.dropped(0), 1u);
+  EXPECT_EQ(q.dropped(1), 1u);
+  EXPECT_EQ(q.size(), 4u);
+}
+
+TEST(BoundedQueue, PopsInArrivalOrderAndFreesTheSlotOfItsClass) {
+  BoundedQueue<int, 2> q({2, 1});
+  q.push(0, 1);
+  q.push(1, 2);
+  q.push(0, 3);
+  int v = 0;
+  ASSERT_TRUE(q.pop(&v));
+  EXPECT_EQ(v, 1);
+  ASSERT_TRUE(q.pop(&v));
+  EXPECT_EQ(v, 2);
+  EXPECT_TRUE(q.push(1, 4));  // the scan slot is free again
+  ASSERT_TRUE(q.pop(&v));
+  EXPECT_EQ(v, 3);
+  ASSERT_TRUE(q.pop(&v));
+  EXPECT_EQ(v, 4);
+}
+
+TEST(BoundedQueue, CloseDrainsWhatIsQueuedThenStopsAndRefusesPushes) {
+  BoundedQueue<int, 1> q({5});
+  q.push(0, 7);
+  q.close();
+  EXPECT_FALSE(q.push(0, 8));
+  int v = 0;
+  ASSERT_TRUE(q.pop(&v));
+  EXPECT_EQ(v, 7);
+  EXPECT_FALSE(q.pop(&v));
+}
+
+sensor_msgs::Imu imuMsg(double t_s, double acc_z) {
+  sensor_msgs::Imu m;
+  m.header.stamp = ros::Time(t_s);
+  m.linear_acceleration.z = acc_z;
+  m.angular_velocity.x = 0.01;
+  return m;
+}
+
+TEST(ImuUnitGate, AutoHoldsTheFirstSamplesThenReleasesThemScaledFromG) {
+  ImuUnitGate gate("/imu", "auto", 5);
+  for (int i = 0; i < 4; ++i) EXPECT_TRUE(gate.add(imuMsg(100 + 0.01 * i, 1.0)).empty());
+  EXPECT_FALSE(gate.decided());
+  const auto out = gate.add(imuMsg(100.04, 1.0));
+  ASSERT_EQ(out.size(), 5u);
+  EXPECT_TRUE(gate.decided());
+  EXPECT_DOUBLE_EQ(gate.accScale(), 9.80665);
+  EXPECT_DOUBLE_EQ(out[0].acc_m_s2.z(), 9.80665);
+  EXPECT_EQ(out[0].stamp_ns, 100'000'000'000);
+  EXPECT_EQ(out[4].stamp_ns, 100'040'000'000);
+  const auto next = gate.add(imuMsg(100.05, 1.0));  // passes straight through now
+  ASSERT_EQ(next.size(), 1u);
+  EXPECT_DOUBLE_EQ(next[0].acc_m_s2.z(), 9.80665);
+}
+
+TEST(ImuUnitGate, AutoKeepsMetresPerSecondSquared) {
+  ImuUnitGate gate("/imu", "auto", 3);
+  gate.add(imuMsg(1.0, 9.81));
+  gate.add(imuMsg(1.01, 9.81));
+  const auto out = gate.add(imuMsg(1.02, 9.81));
+  ASSERT_EQ(out.size(), 3u);
+  EXPECT_DOUBLE_EQ(out[2].acc_m_s2.z(), 9.81);
+}
+
+TEST(ImuUnitGate, ReleaseAtEndOfStreamDecidesFromFewerSamples) {
+  ImuUnitGate gate("/imu", "auto", 50);
+  gate.add(imuMsg(1.0, 1.0));
+  gate.add(imuMsg(1.01, 1.0));
+  const auto out = gate.release();
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_DOUBLE_EQ(out[1].acc_m_s2.z(), 9.80665);
+  EXPECT_TRUE(gate.release().empty());
+}
+
+TEST(ImuUnitGate, AConfiguredUnitPassesEverySampleAtOnce) {
+  ImuUnitGate g("/imu", "g"), mps2("/imu", "m/s2");
+  ASSERT_EQ(g.add(imuMsg(1.0, 1.0)).size(), 1u);
+  EXPECT_DOUBLE_EQ(g.add(imuMsg(1.01, 2.0))[0].acc_m_s2.z(), 2 * 9.80665);
+  EXPECT_DOUBLE_EQ(mps2.add(imuMsg(1.0, 9.7))[0].acc_m_s2.z(), 9.7);
+}
+
+TEST(ImuUnitGate, AnUnknownUnitIsAnError) { EXPECT_THROW(ImuUnitGate("/imu", "ft/s2"), Error); }
+
+TEST(RosMessages, CloudIsMovedIntoTheTargetFrameWithIntensity) {
+  Point p;
+  p.xyz = {1.f, 0.f, 0.f};
+  p.intensity = 42.f;
+  Eigen::Isometry3d T_world_body = Eigen::Isometry3d::Identity();
+  T_world_body.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T_world_body.translation() = Eigen::Vector3d(10, 20, 30);
+  const auto msg = toPointCloud2({p, p}, T_world_body, 1'500'000'000'123, "map");
+  EXPECT_EQ(msg.header.frame_id, "map");
+  EXPECT_EQ(msg.header.stamp.sec, 1500u);
+  EXPECT_EQ(msg.header.stamp.nsec, 123u);
+  ASSERT_EQ(msg.width, 2u);
+  ASSERT_EQ(msg.fields.size(), 4u);
+  EXPECT_EQ(msg.fields[3].name, "intensity");
+  ASSERT_EQ(msg.data.size(), 32u);
+  float v[4];
+  std::memcpy(v, msg.data.data() + 16, sizeof v);
+  EXPECT_NEAR(v[0], 10.f, 1e-5);  // x rotated onto +y, then translated
+  EXPECT_NEAR(v[1], 21.f, 1e-5);
+  EXPECT_NEAR(v[2], 30.f, 1e-5);
+  EXPECT_EQ(v[3], 42.f);
+}
+
+TEST(RosMessages, PoseAndTransformCarryTheStateInTheirFrames) {
+  NavState s;
+  s.stamp_ns = 2'000'000'001;
+  s.p_world = {1, 2, 3};
+  s.q_world_body = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()));
+  const auto pose = toPoseStamped(s, "map");
+  EXPECT_EQ(pose.header.frame_id, "map");
+  EXPECT_EQ(pose.header.stamp.toNSec(), 2'000'000'001u);
+  EXPECT_DOUBLE_EQ(pose.pose.position.z, 3.0);
+  EXPECT_NEAR(pose.pose.orientation.x, std::sin(0.15), 1e-12);
+  EXPECT_NEAR(pose.pose.orientation.w, std::cos(0.15), 1e-12);
+  const auto tf = toTransformStamped(s, "map", "imu");
+  EXPECT_EQ(tf.child_frame_id, "imu");
+  EXPECT_DOUBLE_EQ(tf.transform.translation.y, 2.0);
+  EXPECT_NEAR(tf.transform.rotation.x, std::sin(0.15), 1e-12);
+}
+
+}  // namespace
+}  // namespace mmlio::ros_node
