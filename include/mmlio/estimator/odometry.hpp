@@ -31,7 +31,7 @@ struct OdometryConfig {
   lidar::FeatureConfig features;
   lidar::BadFrameConfig bad_frame;
   double edge_voxel_m = 0.2;            // downsampling of merged edge features
-  double plane_voxel_m = 0.4;           // downsampling of merged plane features
+  double plane_voxel_m = 0.3;           // downsampling of merged plane features
   double map_voxel_m = 0.2;             // local map resolution
   double local_map_radius_m = 60.0;     // local map kept around the current pose
   int window_size = 4;                  // keyframes in the sliding window
