@@ -45,4 +45,18 @@ std::vector<estimator::LidarSetup> lidarSetups(const io::RigConfig& cfg, const s
   return out;
 }
 
+MappingBackend::Config mappingBackendConfig(const io::RigConfig& cfg) {
+  MappingBackend::Config mb;
+  mb.loop_enabled = cfg.loop.enabled;
+  mb.loop.search_radius_m = cfg.loop.search_radius_m;
+  mb.loop.min_time_gap_s = cfg.loop.min_time_gap_s;
+  mb.loop.max_fitness_m = cfg.loop.max_fitness_m;
+  mb.loop.min_overlap = cfg.loop.min_overlap;
+  // Corridor-like places (weak along one axis) give loops that slide: measured on the simulated
+  // corridor, accepting them at the backend's 0.03 raised the ATE (5.2 -> 10.7 cm).
+  mb.loop.min_translation_eigenvalue = 0.08;
+  mb.map_leaf_m = cfg.output.map_voxel_m;
+  return mb;
+}
+
 }  // namespace mmlio::pipeline

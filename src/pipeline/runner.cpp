@@ -15,6 +15,7 @@
 #include "mmlio/io/trajectory_writer.hpp"
 #include "mmlio/pipeline/online_pipeline.hpp"
 #include "mmlio/pipeline/mapping_backend.hpp"
+#include "mmlio/pipeline/odometry_setup.hpp"
 #include "mmlio/pipeline/progress.hpp"
 #include "mmlio/pipeline/report.hpp"
 
@@ -40,17 +41,7 @@ RunResult runBag(const RunOptions& options) {
   if (!io::isValidMode(mode)) throw Error("unknown mode '" + mode + "' (expected hvi, vi or hi)");
 
   io::BagSource source(options.bag_path, io::bagSourceOptions(cfg, mode));
-  MappingBackend::Config mb;
-  mb.loop_enabled = cfg.loop.enabled;
-  mb.loop.search_radius_m = cfg.loop.search_radius_m;
-  mb.loop.min_time_gap_s = cfg.loop.min_time_gap_s;
-  mb.loop.max_fitness_m = cfg.loop.max_fitness_m;
-  mb.loop.min_overlap = cfg.loop.min_overlap;
-  // Corridor-like places (weak along one axis) give loops that slide: measured on the simulated
-  // corridor, accepting them at the backend's 0.03 raised the ATE (5.2 -> 10.7 cm).
-  mb.loop.min_translation_eigenvalue = 0.08;
-  mb.map_leaf_m = cfg.output.map_voxel_m;
-  MappingBackend mapping(mb);
+  MappingBackend mapping(mappingBackendConfig(cfg));
 
   RunResult result;
   std::map<std::string, LidarTally> tally;
