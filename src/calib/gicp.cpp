@@ -1,0 +1,205 @@
+#include "mmlio/calib/gicp.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <nanoflann.hpp>
+#include <unordered_map>
+
+#include "mmlio/core/so3.hpp"
+
+namespace mmlio::calib {
+namespace {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+struct CloudAdaptor {
+  const std::vector<Eigen::Vector3d>* pts;
+  std::size_t kdtree_get_point_count() const { return pts->size(); }
+  double kdtree_get_pt(std::size_t i, std::size_t d) const { return (*pts)[i][static_cast<int>(d)]; }
+  template <class BBox>
+  bool kdtree_get_bbox(BBox&) const { return false; }
+};
+using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, CloudAdaptor>, CloudAdaptor, 3,
+                                                   std::uint32_t>;
+
+struct VoxelKey {
+  std::int64_t x, y, z;
+  bool operator==(const VoxelKey& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+struct VoxelKeyHash {
+  std::size_t operator()(const VoxelKey& k) const {
+    return static_cast<std::size_t>((k.x * 73856093) ^ (k.y * 19349669) ^ (k.z * 83492791));
+  }
+};
+
+double geometric(double a, double b, int level, int levels) {
+  if (levels <= 1) return b;
+  return a * std::pow(b / a, static_cast<double>(level) / (levels - 1));
+}
+
+std::vector<Eigen::Matrix3d> covariancesWithTree(const std::vector<Eigen::Vector3d>& points, const KdTree& tree, int k_in,
+                                                 double eps) {
+  std::vector<Eigen::Matrix3d> covs(points.size(), Eigen::Matrix3d::Identity() * eps);
+  const std::size_t k = static_cast<std::size_t>(std::max(3, k_in));
+  if (points.size() < k) return covs;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<std::uint32_t> idx(k);
+    std::vector<double> d2(k);
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const std::size_t n = tree.knnSearch(points[i].data(), k, idx.data(), d2.data());
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (std::size_t j = 0; j < n; ++j) mean += points[idx[j]];
+      mean /= static_cast<double>(n);
+      Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
+      for (std::size_t j = 0; j < n; ++j) {
+        const Eigen::Vector3d d = points[idx[j]] - mean;
+        c += d * d.transpose();
+      }
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(c);
+      // Segal et al.: keep the directions, replace the spread by a unit disc of thickness eps.
+      const Eigen::Vector3d values(eps, 1.0, 1.0);
+      covs[i] = es.eigenvectors() * values.asDiagonal() * es.eigenvectors().transpose();
+    }
+  });
+  return covs;
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector3d> voxelCentroids(const std::vector<Eigen::Vector3d>& pts, double leaf_m) {
+  if (leaf_m <= 0) return pts;
+  const double inv = 1.0 / leaf_m;
+  std::unordered_map<VoxelKey, std::size_t, VoxelKeyHash> index;
+  index.reserve(pts.size());
+  std::vector<Eigen::Vector3d> sum;
+  std::vector<int> count;
+  for (const auto& p : pts) {
+    const VoxelKey key{static_cast<std::int64_t>(std::floor(p.x() * inv)), static_cast<std::int64_t>(std::floor(p.y() * inv)),
+                       static_cast<std::int64_t>(std::floor(p.z() * inv))};
+    auto [it, inserted] = index.emplace(key, sum.size());
+    if (inserted) {
+      sum.push_back(p);
+      count.push_back(1);
+    } else {
+      sum[it->second] += p;
+      ++count[it->second];
+    }
+  }
+  for (std::size_t i = 0; i < sum.size(); ++i) sum[i] /= count[i];
+  return sum;
+}
+
+std::vector<Eigen::Matrix3d> planeCovariances(const std::vector<Eigen::Vector3d>& points, int k, double plane_epsilon) {
+  CloudAdaptor adaptor{&points};
+  KdTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+  tree.buildIndex();
+  return covariancesWithTree(points, tree, k, plane_epsilon);
+}
+
+GicpResult gicp(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
+                const Eigen::Isometry3d& T_target_source_guess, const GicpConfig& cfg) {
+  GicpResult result;
+  result.T_target_source = T_target_source_guess;
+  if (source.empty() || target.size() < 3) return result;
+
+  CloudAdaptor target_adaptor{&target};
+  KdTree target_tree(3, target_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+  target_tree.buildIndex();
+  const std::vector<Eigen::Matrix3d> target_covs =
+      covariancesWithTree(target, target_tree, cfg.covariance_neighbours, cfg.plane_epsilon);
+  std::vector<Eigen::Matrix3d> source_covs;
+  if (cfg.source_covariances) {
+    source_covs = planeCovariances(source, cfg.covariance_neighbours, cfg.plane_epsilon);
+  } else {
+    source_covs.assign(source.size(), Eigen::Matrix3d::Identity() * cfg.plane_epsilon);
+  }
+
+  // Per-point linearisation in parallel, summed serially in index order: deterministic.
+  std::vector<int> match(source.size(), -1);
+  std::vector<Matrix6d> Hs(source.size());
+  std::vector<Vector6d> gs(source.size());
+  std::vector<double> dist(source.size(), 0.0);
+  Eigen::Isometry3d T = T_target_source_guess;
+
+  auto linearise = [&](double gate_m, Matrix6d* H, Vector6d* g, int* n_inliers, double* dist_sum) {
+    const double gate_sq = gate_m * gate_m;
+    const Eigen::Matrix3d R = T.linear();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, source.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        const Eigen::Vector3d x = T * source[i];
+        std::uint32_t j = 0;
+        double d2 = 0;
+        target_tree.knnSearch(x.data(), 1, &j, &d2);
+        if (d2 > gate_sq) {
+          match[i] = -1;
+          continue;
+        }
+        match[i] = static_cast<int>(j);
+        dist[i] = std::sqrt(d2);
+        const Eigen::Matrix3d C = target_covs[j] + R * source_covs[i] * R.transpose();
+        const Eigen::Matrix3d W = C.inverse();
+        const Eigen::Vector3d res = target[j] - x;
+        Eigen::Matrix<double, 3, 6> J;
+        J.leftCols<3>() = -Eigen::Matrix3d::Identity();
+        J.rightCols<3>() = so3::hat(x);
+        Hs[i].noalias() = J.transpose() * W * J;
+        gs[i].noalias() = J.transpose() * W * res;
+      }
+    });
+    H->setZero();
+    g->setZero();
+    *n_inliers = 0;
+    *dist_sum = 0;
+    for (std::size_t i = 0; i < source.size(); ++i) {
+      if (match[i] < 0) continue;
+      *H += Hs[i];
+      *g += gs[i];
+      *dist_sum += dist[i];
+      ++*n_inliers;
+    }
+  };
+
+  const int levels = std::max(1, cfg.levels);
+  Matrix6d H;
+  Vector6d g;
+  int n = 0;
+  double dist_sum = 0;
+  bool last_level_converged = false;
+  for (int level = 0; level < levels; ++level) {
+    const double gate = geometric(cfg.max_corr_dist_coarse_m, cfg.max_corr_dist_fine_m, level, levels);
+    last_level_converged = false;
+    for (int it = 0; it < cfg.max_iterations_per_level; ++it) {
+      linearise(gate, &H, &g, &n, &dist_sum);
+      ++result.iterations;
+      if (n < cfg.min_correspondences) return result;
+      // Levenberg-style damping keeps a near-degenerate system (few planes) from jumping.
+      const Vector6d delta = (H + 1e-6 * H.diagonal().asDiagonal().toDenseMatrix() + 1e-9 * Matrix6d::Identity())
+                                 .ldlt()
+                                 .solve(-g);
+      Eigen::Isometry3d dT = Eigen::Isometry3d::Identity();
+      dT.linear() = so3::exp(delta.tail<3>()).toRotationMatrix();
+      dT.translation() = delta.head<3>();
+      T = dT * T;
+      if (delta.head<3>().norm() < cfg.converged_translation_m && delta.tail<3>().norm() < cfg.converged_rotation_rad) {
+        last_level_converged = true;
+        break;
+      }
+    }
+  }
+  linearise(cfg.max_corr_dist_fine_m, &H, &g, &n, &dist_sum);
+  result.T_target_source = T;
+  result.inliers = n;
+  result.overlap = static_cast<double>(n) / static_cast<double>(source.size());
+  result.fitness_m = n > 0 ? dist_sum / n : 0.0;
+  result.hessian = H;
+  result.converged = n >= cfg.min_correspondences && last_level_converged;
+  return result;
+}
+
+}  // namespace mmlio::calib
