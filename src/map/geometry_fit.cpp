@@ -32,12 +32,13 @@ Scatter scatterOf(const std::vector<Eigen::Vector3d>& pts) {
 
 }  // namespace
 
-PlaneFit fitPlane(const std::vector<Eigen::Vector3d>& pts, double max_residual_m) {
+PlaneFit fitPlane(const std::vector<Eigen::Vector3d>& pts, double max_residual_m, double min_spread_ratio) {
   PlaneFit fit;
   if (pts.size() < 3) return fit;
   const Scatter s = scatterOf(pts);
   // Collinear (or coincident) points leave the normal undetermined.
   if (s.eigenvalues(1) <= 1e-12 * std::max(1.0, s.eigenvalues(2))) return fit;
+  if (s.eigenvalues(1) < min_spread_ratio * s.eigenvalues(2)) return fit;  // a line: normal undetermined
   fit.normal = s.eigenvectors.col(0).normalized();
   fit.d = -fit.normal.dot(s.mean);
   for (const auto& p : pts) fit.max_residual_m = std::max(fit.max_residual_m, std::abs(fit.normal.dot(p) + fit.d));

@@ -50,3 +50,18 @@ TEST(GeometryFit, LineIsRejectedForARoundBlob) {
   std::vector<Eigen::Vector3d> pts{{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
   EXPECT_FALSE(fitLine(pts).ok);
 }
+
+TEST(GeometryFit, PlaneIsRejectedForOneNoisyRingLine) {
+  // Five neighbours from one LiDAR ring on a floor: a 1 m line with 1.5 cm range noise. Any plane
+  // containing the line fits them, so the fitted normal says nothing about tilt.
+  std::mt19937 rng(9);
+  std::normal_distribution<double> noise(0.0, 0.015);
+  std::vector<Eigen::Vector3d> line;
+  for (int i = 0; i < 5; ++i) line.push_back({0.25 * i, noise(rng), noise(rng)});
+  EXPECT_FALSE(fitPlane(line, 0.1).ok);
+  // The same points with two rows 0.3 m apart form a patch and are accepted.
+  std::vector<Eigen::Vector3d> patch = line;
+  for (int i = 0; i < 4; ++i) patch.push_back({0.25 * i + 0.1, 0.3 + noise(rng), noise(rng)});
+  EXPECT_TRUE(fitPlane(patch, 0.1).ok);
+  EXPECT_TRUE(fitPlane(line, 0.1, 0.0).ok);  // without the spread test the line passes
+}

@@ -8,13 +8,18 @@
 namespace mmlio::map {
 
 struct PlaneFit {
-  bool ok = false;                                  // >= 3 non-collinear points, all within max_residual_m
+  bool ok = false;                                  // a 2-D patch (see fitPlane), all points within max_residual_m
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit
   double d = 0;                                     // n.x + d = 0
   double max_residual_m = 0;                        // largest |n.x + d| over the points
 };
-/// Total least squares plane through pts (normal = smallest-eigenvalue eigenvector).
-PlaneFit fitPlane(const std::vector<Eigen::Vector3d>& pts, double max_residual_m = 0.1);
+/// Total least squares plane through pts (normal = smallest-eigenvalue eigenvector). The points
+/// must span two directions: lambda_mid >= min_spread_ratio * lambda_max. Neighbours taken from a
+/// single LiDAR ring (a floor or ceiling seen by one ring of a spinning LiDAR) are a noisy line
+/// whose fitted "normal" may tilt freely about it; residuals against such planes tilted the hall
+/// run by 20 mrad during a turn (0.01 = the cross spread's std-dev at least 10 % of the long one).
+PlaneFit fitPlane(const std::vector<Eigen::Vector3d>& pts, double max_residual_m = 0.1,
+                  double min_spread_ratio = 0.01);
 
 struct LineFit {
   bool ok = false;                                        // >= 2 points, largest eigenvalue > ratio * second
