@@ -161,7 +161,10 @@ IcpResult alignPointToPlane(const std::vector<Eigen::Vector3d>& source, const Ic
         ++n_valid;
       }
       ++result.iterations;
-      if (n_valid < cfg.min_correspondences) return result;  // not converged
+      if (n_valid < cfg.min_correspondences) {  // not converged; say how few there were
+        result.correspondences = n_valid;
+        return result;
+      }
       const Vector6d delta = (H + 1e-9 * Matrix6d::Identity()).ldlt().solve(-g);
       Eigen::Isometry3d dT = Eigen::Isometry3d::Identity();
       dT.linear() = so3::exp(delta.tail<3>()).toRotationMatrix();

@@ -96,6 +96,27 @@ struct RelativePoseCost {
   Matrix6d S;
 };
 
+/// Keeps a keyframe's gravity direction (roll, pitch) at its odometry value.
+struct TiltCost {
+  TiltCost(const Eigen::Quaterniond& q_world_body_odom, double sigma_rad)
+      : up_body(q_world_body_odom.conjugate() * Eigen::Vector3d::UnitZ()), inv_sigma(1.0 / sigma_rad) {}
+
+  template <typename T>
+  bool operator()(const T* x, T* residual) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> q(x + 3);
+    const Eigen::Matrix<T, 3, 1> up = q.conjugate() * Eigen::Matrix<T, 3, 1>::UnitZ();
+    for (int i = 0; i < 3; ++i) residual[i] = T(inv_sigma) * (up[i] - T(up_body[i]));
+    return true;
+  }
+
+  static ceres::CostFunction* Create(const Eigen::Quaterniond& q_world_body_odom, double sigma_rad) {
+    return new ceres::AutoDiffCostFunction<TiltCost, 3, 7>(new TiltCost(q_world_body_odom, sigma_rad));
+  }
+
+  Eigen::Vector3d up_body;
+  double inv_sigma;
+};
+
 Matrix6d sqrtInformation(const Matrix6d& information) {
   const Eigen::LLT<Matrix6d> llt(information);
   if (llt.info() != Eigen::Success) throw std::invalid_argument("PoseGraph: information matrix is not positive definite");
@@ -148,7 +169,12 @@ bool PoseGraph::optimize() {
                              x[e.from].data(), x[e.to].data());
   for (const Edge& e : loops_)
     problem.AddResidualBlock(RelativePoseCost::Create(e.T_from_to, e.sqrt_information),
-                             new ceres::HuberLoss(cfg_.loop_huber), x[e.from].data(), x[e.to].data());
+                             cfg_.loop_huber > 0 ? new ceres::HuberLoss(cfg_.loop_huber) : nullptr, x[e.from].data(), x[e.to].data());
+  if (cfg_.tilt_sigma_rad > 0.0)
+    for (std::size_t i = 1; i < nodes_.size(); ++i)
+      problem.AddResidualBlock(
+          TiltCost::Create(Eigen::Quaterniond(nodes_[i].T_world_body_odom.rotation()), cfg_.tilt_sigma_rad), nullptr,
+          x[i].data());
   problem.SetParameterBlockConstant(x[0].data());
 
   ceres::Solver::Options options;

@@ -27,6 +27,42 @@ bool MappingBackend::plausibleCorrection(const backend::LoopResult& r) const {
   return false;
 }
 
+void MappingBackend::tryLoop(int k) {
+  last_checked_ = k;
+  ++loop_attempts_;
+  backend::LoopResult r = closer_->detect(graph_, k);
+  if (r.accepted && !plausibleCorrection(r)) {
+    r.accepted = false;
+    ++rejected_;
+  }
+  if (r.accepted) {
+    const Eigen::Isometry3d d = (graph_.pose(r.match).inverse() * graph_.pose(k)).inverse() * r.T_match_query;
+    log::debug("loop ", k, " -> ", r.match, " corrects the estimate by (", d.translation().transpose(), ") m, (",
+               Eigen::AngleAxisd(d.rotation()).angle() * Eigen::AngleAxisd(d.rotation()).axis().transpose(), ") rad");
+    graph_.addLoop(r.match, r.query, r.T_match_query, r.information);
+    graph_.optimize();
+    Json loop = Json::object();
+    const Stamp t0 = graph_.node(0).stamp_ns;  // seconds since the first keyframe: readable
+    loop["query_s"] = toSec(graph_.node(r.query).stamp_ns - t0);
+    loop["match_s"] = toSec(graph_.node(r.match).stamp_ns - t0);
+    loop["fitness_m"] = r.fitness_m;
+    loop["overlap"] = r.overlap;
+    loops_.push_back(loop);
+    log::emit(log::Level::kInfo, "loop closed: keyframe ", r.query, " -> ", r.match, " (fitness ", r.fitness_m,
+              " m, overlap ", r.overlap, ")");
+  } else if (r.candidates_tried > 0) {
+    ++rejected_;
+    log::emit(log::Level::kDebug, "loop candidate rejected for keyframe ", k, ": ", r.reason);
+  }
+}
+
+void MappingBackend::finish() {
+  // The end of a run is where a loop matters most (a sequence that returns to its start), but it
+  // is rarely a multiple of loop_check_every: check the last keyframe once more.
+  const int last = static_cast<int>(graph_.size()) - 1;
+  if (closer_ && last > 0 && last != last_checked_) tryLoop(last);
+}
+
 void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
   const Eigen::Isometry3d T_world_body = sweep.state.pose();
   odometry_.push_back({sweep.state.stamp_ns, T_world_body});
@@ -44,30 +80,7 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
     submaps_.push_back(std::make_unique<MapAccumulator>(cfg_.map_leaf_m));
     T_world_keyframe_ = T_world_body;
 
-    if (closer_ && k > 0 && k % std::max(1, cfg_.loop_check_every) == 0) {
-      ++loop_attempts_;
-      backend::LoopResult r = closer_->detect(graph_, k);
-      if (r.accepted && !plausibleCorrection(r)) {
-        r.accepted = false;
-        ++rejected_;
-      }
-      if (r.accepted) {
-        graph_.addLoop(r.match, r.query, r.T_match_query, r.information);
-        graph_.optimize();
-        Json loop = Json::object();
-        const Stamp t0 = graph_.node(0).stamp_ns;  // seconds since the first keyframe: readable
-        loop["query_s"] = toSec(graph_.node(r.query).stamp_ns - t0);
-        loop["match_s"] = toSec(graph_.node(r.match).stamp_ns - t0);
-        loop["fitness_m"] = r.fitness_m;
-        loop["overlap"] = r.overlap;
-        loops_.push_back(loop);
-        log::emit(log::Level::kInfo, "loop closed: keyframe ", r.query, " -> ", r.match, " (fitness ", r.fitness_m,
-                  " m, overlap ", r.overlap, ")");
-      } else if (r.candidates_tried > 0) {
-        ++rejected_;
-        log::emit(log::Level::kDebug, "loop candidate rejected for keyframe ", k, ": ", r.reason);
-      }
-    }
+    if (closer_ && k > 0 && k % std::max(1, cfg_.loop_check_every) == 0) tryLoop(k);
   }
   // Points go into the current keyframe's submap, in that keyframe's frame.
   const std::size_t stride = static_cast<std::size_t>(std::max(1, cfg_.map_point_stride));

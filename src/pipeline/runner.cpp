@@ -170,6 +170,11 @@ RunResult runBag(const RunOptions& options) {
   rep["wall_time_s"] = wall_s;
   rep["realtime_factor"] = wall_s > 0 ? toSec(odometry.lastImuNs() - source.beginNs()) / wall_s : 0.0;
 
+  try {
+    mapping.finish();
+  } catch (const std::exception& e) {  // a failed last loop check must not cost the trajectory
+    log::warn("final loop check failed: ", e.what());
+  }
   rep["mapping"] = mapping.toJson();
 
   // ---- outputs ----

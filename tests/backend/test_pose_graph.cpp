@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -134,6 +135,41 @@ TEST(PoseGraph, KeyframeAddedAfterOptimisationChainsOntoTheCorrectedEstimate) {
   const int k = graph.addKeyframe(next);
   EXPECT_TRUE(graph.pose(k).isApprox(graph.pose(last) * pose2d(1.0, 0, 0), 1e-9));
   EXPECT_TRUE(graph.pose(k).isApprox(graph.correct(next.stamp_ns, next.T_world_body_odom), 1e-9));
+}
+
+/// Angle between a pose's body z axis and the world vertical.
+double tiltOf(const Eigen::Isometry3d& T) { return std::acos(std::clamp(T.linear()(2, 2), -1.0, 1.0)); }
+
+TEST(PoseGraph, ALoopClosingVerticalDriftMovesHeightsNotTilt) {
+  // Odometry that climbs 1 cm per 1 m step with a level attitude (the IMU observes roll and
+  // pitch): after the square the loop says the end is 40 cm lower. The correction must come from
+  // the heights; without the tilt factor the graph pitches the keyframes instead.
+  const auto gt = squareLoop();
+  std::vector<Eigen::Isometry3d> odom{gt[0]};
+  for (std::size_t i = 1; i < gt.size(); ++i) {
+    Eigen::Isometry3d rel = gt[i - 1].inverse() * gt[i];
+    rel.translation().z() += 0.01;
+    odom.push_back(odom.back() * rel);
+  }
+  const auto solve = [&](double tilt_sigma_rad, double* worst_tilt, double* end_error) {
+    PoseGraph::Config cfg;
+    cfg.tilt_sigma_rad = tilt_sigma_rad;
+    PoseGraph graph = buildGraph(odom, cfg);
+    const int last = static_cast<int>(graph.size()) - 1;
+    graph.addLoop(last, 0, gt[last].inverse() * gt[0], isotropicInformation(0.01, 0.001));
+    ASSERT_TRUE(graph.optimize());
+    *worst_tilt = 0;
+    for (int i = 0; i <= last; ++i) *worst_tilt = std::max(*worst_tilt, tiltOf(graph.pose(i)));
+    *end_error = (graph.pose(last).translation() - gt[last].translation()).norm();
+  };
+  double tilt_with = 0, end_with = 0, tilt_without = 0, end_without = 0;
+  solve(0.003, &tilt_with, &end_with);
+  solve(0.0, &tilt_without, &end_without);
+  std::printf("worst tilt with the factor %.2f mrad (end %.3f m), without %.2f mrad (end %.3f m)\n",
+              1e3 * tilt_with, end_with, 1e3 * tilt_without, end_without);
+  EXPECT_LT(end_with, 0.05);
+  EXPECT_LT(tilt_with, 0.003);
+  EXPECT_GT(tilt_without, 3.0 * tilt_with);
 }
 
 TEST(PoseGraph, RejectsBadInput) {

@@ -40,6 +40,9 @@ SimRun runSimulated(const std::string& scenario, double duration_s, const std::s
                   r.state.p_world.y(), r.state.p_world.z(), t.p_world.x(), t.p_world.y(), t.p_world.z(),
                   r.state.v_world.norm(), t.v_world.norm(), r.state.bias.acc_m_s2.x(), r.state.bias.acc_m_s2.y(),
                   r.state.bias.acc_m_s2.z(), r.note.c_str());
+      const Eigen::Vector3d tilt_error = r.state.q_world_body.conjugate() * Eigen::Vector3d::UnitZ() -
+                                         t.q_world_body.conjugate() * Eigen::Vector3d::UnitZ();
+      std::printf(" tilt err %.1f %.1f mrad", 1e3 * tilt_error.x(), 1e3 * tilt_error.y());
       for (const auto& [k, ms] : r.times_ms) std::printf(" %s=%.1f", k.c_str(), ms);
       for (const auto& l : r.lidars) std::printf(" | %s e%zu p%zu%s", l.sensor.c_str(), l.edges, l.planes, l.bad_frame ? " BAD" : "");
       std::printf("\n");

@@ -34,6 +34,9 @@ class MappingBackend {
   /// Every tracked sweep in order (keyframe sweeps open a new submap and graph node).
   void addSweep(const estimator::SweepResult& sweep);
 
+  /// After the last sweep: a loop check on the last keyframe if it has not had one.
+  void finish();
+
   Trajectory correctedTrajectory() const;
   std::vector<Point> map() const;
   std::size_t keyframes() const;
@@ -43,6 +46,7 @@ class MappingBackend {
 
  private:
   bool plausibleCorrection(const backend::LoopResult& r) const;
+  void tryLoop(int keyframe);
 
   Config cfg_;
   backend::PoseGraph graph_;
@@ -51,6 +55,7 @@ class MappingBackend {
   Trajectory odometry_;
   Eigen::Isometry3d T_world_keyframe_ = Eigen::Isometry3d::Identity();
   std::size_t loop_attempts_ = 0;
+  int last_checked_ = -1;
   Json loops_ = Json::array();
   std::size_t rejected_ = 0;
   std::size_t sweeps_ = 0;

@@ -1,0 +1,90 @@
+// The run's mapping back end: a walk around a room that ends where it started closes its loop at
+// the end of the run, even when the last keyframe is not one the periodic loop check visits.
+#include <gtest/gtest.h>
+
+#include "../backend/synthetic_scene.hpp"
+#include "mmlio/pipeline/mapping_backend.hpp"
+
+namespace mmlio::pipeline {
+namespace {
+
+using backend::testing::pose;
+constexpr double kDeg = M_PI / 180.0;
+
+struct Walk {
+  std::vector<Eigen::Isometry3d> truth, odometry;
+  std::vector<Stamp> stamps;
+};
+
+/// Six keyframes 4.5 s apart around room A, back at the start; the odometry gains 0.3 deg of yaw
+/// and 3 cm of sideways drift per step (one or two sigmas of the pose graph's odometry edges).
+Walk roomWalk() {
+  Walk w;
+  const std::vector<Eigen::Isometry3d> truth = {pose(-3, -2, 1, 0),         pose(0, -3, 1, 20 * kDeg),
+                                                pose(3.5, -1, 1, 80 * kDeg), pose(3, 2.5, 1, 160 * kDeg),
+                                                pose(-1, 3, 1, 220 * kDeg),  pose(-3.05, -1.95, 1, 2 * kDeg)};
+  w.truth = truth;
+  w.odometry = {truth[0]};
+  for (std::size_t i = 1; i < truth.size(); ++i)
+    w.odometry.push_back(w.odometry.back() * (truth[i - 1].inverse() * truth[i]) * pose(0, 0.03, 0, 0.3 * kDeg));
+  for (std::size_t i = 0; i < truth.size(); ++i) w.stamps.push_back(fromSec(4.5 * static_cast<double>(i)));
+  return w;
+}
+
+estimator::SweepResult sweepAt(const Walk& w, std::size_t i, const backend::testing::Scene& scene) {
+  estimator::SweepResult r;
+  r.status = estimator::SweepResult::Status::kTracking;
+  r.keyframe = true;
+  r.state.stamp_ns = w.stamps[i];
+  r.state.p_world = w.odometry[i].translation();
+  r.state.q_world_body = Eigen::Quaterniond(w.odometry[i].rotation());
+  for (const Eigen::Vector3d& p : backend::testing::scan(scene, w.truth[i], 100 + static_cast<unsigned>(i))) {
+    Point q;
+    q.xyz = p.cast<float>();
+    r.points_body.push_back(q);
+  }
+  return r;
+}
+
+MappingBackend::Config config() {
+  MappingBackend::Config cfg;
+  cfg.loop_check_every = 4;  // keyframe 4 is checked (its candidates are too recent), 5 is not
+  return cfg;
+}
+
+TEST(MappingBackend, ClosesTheLoopOfTheLastKeyframeWhenTheRunFinishes) {
+  const auto scene = backend::testing::roomA();
+  const Walk w = roomWalk();
+  MappingBackend backend(config());
+  for (std::size_t i = 0; i < w.truth.size(); ++i) backend.addSweep(sweepAt(w, i, scene));
+  ASSERT_EQ(backend.keyframes(), 6u);
+  EXPECT_EQ(backend.loops(), 0u);
+  const double drift_m = (w.odometry.back().translation() - w.truth.back().translation()).norm();
+  EXPECT_GT(drift_m, 0.08);
+
+  backend.finish();
+  ASSERT_EQ(backend.loops(), 1u);
+  const Trajectory corrected = backend.correctedTrajectory();
+  ASSERT_EQ(corrected.size(), w.truth.size());
+  const Eigen::Isometry3d end_error = w.truth.back().inverse() * corrected.back().T_world_body;
+  EXPECT_LT(end_error.translation().norm(), 0.25 * drift_m) << "drift before the loop " << drift_m << " m";
+  EXPECT_LT(Eigen::AngleAxisd(end_error.rotation()).angle(), 0.2 * kDeg);
+  backend.finish();  // idempotent: the last keyframe has had its check
+  EXPECT_EQ(backend.loops(), 1u);
+}
+
+TEST(MappingBackend, FinishDoesNothingWithLoopClosureOff) {
+  const auto scene = backend::testing::roomA();
+  const Walk w = roomWalk();
+  MappingBackend::Config cfg = config();
+  cfg.loop_enabled = false;
+  MappingBackend backend(cfg);
+  for (std::size_t i = 0; i < w.truth.size(); ++i) backend.addSweep(sweepAt(w, i, scene));
+  backend.finish();
+  EXPECT_EQ(backend.loops(), 0u);
+  const Trajectory t = backend.correctedTrajectory();
+  EXPECT_TRUE(t.back().T_world_body.isApprox(w.odometry.back(), 1e-6));
+}
+
+}  // namespace
+}  // namespace mmlio::pipeline
