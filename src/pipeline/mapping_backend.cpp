@@ -1,5 +1,7 @@
 #include "mmlio/pipeline/mapping_backend.hpp"
 
+#include <algorithm>
+
 #include "mmlio/backend/point_to_plane_icp.hpp"
 #include "mmlio/core/log.hpp"
 
@@ -77,16 +79,28 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
       node.cloud_body = backend::voxelCentroids(pts, cfg_.loop_cloud_voxel_m);
     }
     const int k = graph_.addKeyframe(std::move(node));
-    submaps_.push_back(std::make_unique<MapAccumulator>(cfg_.map_leaf_m));
+    submaps_.emplace_back();
     T_world_keyframe_ = T_world_body;
 
     if (closer_ && k > 0 && k % std::max(1, cfg_.loop_check_every) == 0) tryLoop(k);
   }
-  // Points go into the current keyframe's submap, in that keyframe's frame.
+  // Points go into the current keyframe's submap, in that keyframe's frame. The odometry lists
+  // points_body LiDAR by LiDAR, in the order of sweep.lidars.
   const std::size_t stride = static_cast<std::size_t>(std::max(1, cfg_.map_point_stride));
-  strided_.clear();
-  for (std::size_t i = sweeps_++ % stride; i < sweep.points_body.size(); i += stride) strided_.push_back(sweep.points_body[i]);
-  submaps_.back()->add(strided_, T_world_keyframe_.inverse() * T_world_body);
+  const std::size_t phase = sweeps_++ % stride;
+  const Eigen::Isometry3d T_keyframe_body = T_world_keyframe_.inverse() * T_world_body;
+  std::size_t listed = 0;
+  for (const auto& l : sweep.lidars) listed += l.points;
+  const bool split = cfg_.per_lidar_maps && listed == sweep.points_body.size();
+  std::size_t begin = 0;
+  for (std::size_t l = 0; l < (split ? sweep.lidars.size() : 1); ++l) {
+    const std::size_t end = split ? begin + sweep.lidars[l].points : sweep.points_body.size();
+    strided_.clear();
+    for (std::size_t i = begin + phase; i < end; i += stride) strided_.push_back(sweep.points_body[i]);
+    const std::string key = split ? sweep.lidars[l].sensor : std::string();
+    submaps_.back().try_emplace(key, cfg_.map_leaf_m).first->second.add(strided_, T_keyframe_body);
+    begin = end;
+  }
 }
 
 Trajectory MappingBackend::correctedTrajectory() const {
@@ -97,10 +111,24 @@ Trajectory MappingBackend::correctedTrajectory() const {
   return out;
 }
 
-std::vector<Point> MappingBackend::map() const {
+std::vector<Point> MappingBackend::mergedMap(const std::string* only_lidar) const {
   MapAccumulator merged(cfg_.map_leaf_m);
-  for (std::size_t k = 0; k < submaps_.size(); ++k) merged.add(submaps_[k]->points(), graph_.pose(static_cast<int>(k)));
+  for (std::size_t k = 0; k < submaps_.size(); ++k)
+    for (const auto& [lidar, acc] : submaps_[k])
+      if (!only_lidar || lidar == *only_lidar) merged.add(acc.points(), graph_.pose(static_cast<int>(k)));
   return merged.points();
+}
+
+std::vector<Point> MappingBackend::map() const { return mergedMap(nullptr); }
+
+std::vector<Point> MappingBackend::lidarMap(const std::string& lidar) const { return mergedMap(&lidar); }
+
+std::vector<std::string> MappingBackend::lidarNames() const {
+  std::vector<std::string> names;
+  for (const Submap& submap : submaps_)
+    for (const auto& [lidar, acc] : submap)
+      if (!lidar.empty() && std::find(names.begin(), names.end(), lidar) == names.end()) names.push_back(lidar);
+  return names;
 }
 
 std::size_t MappingBackend::keyframes() const { return graph_.size(); }

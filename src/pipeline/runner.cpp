@@ -197,6 +197,14 @@ RunResult runBag(const RunOptions& options) {
     out["map"] = dir + "map.pcd";
     out["map_points"] = map_points.size();
     out["map_voxel_m"] = cfg.output.map_voxel_m;
+    Json per_lidar_maps = Json::object();
+    for (const std::string& lidar : mapping.lidarNames()) {
+      const std::string path = dir + "map_" + lidar + ".pcd";
+      const std::vector<Point> points = mapping.lidarMap(lidar);
+      io::writePcdBinary(path, points);
+      per_lidar_maps[lidar] = path;
+    }
+    if (!mapping.lidarNames().empty()) out["per_lidar_maps"] = per_lidar_maps;
     rep["outputs"] = out;
     writeReports(dir, rep, result.trajectory, map_points, options.gt_path);
   }

@@ -86,5 +86,44 @@ TEST(MappingBackend, FinishDoesNothingWithLoopClosureOff) {
   EXPECT_TRUE(t.back().T_world_body.isApprox(w.odometry.back(), 1e-6));
 }
 
+TEST(MappingBackend, PerLidarMapsKeepEachLidarsPointsApart) {
+  // One sweep: 30 Velodyne points on a wall at x = +5 m, then 20 Livox points at x = -5 m.
+  estimator::SweepResult r;
+  r.status = estimator::SweepResult::Status::kTracking;
+  r.keyframe = true;
+  r.lidars.resize(2);
+  r.lidars[0].sensor = "velodyne";
+  r.lidars[0].points = 30;
+  r.lidars[1].sensor = "livox";
+  r.lidars[1].points = 20;
+  for (int i = 0; i < 50; ++i) {
+    Point p;
+    p.xyz = Eigen::Vector3f(i < 30 ? 5.f : -5.f, 0.1f * static_cast<float>(i), 1.f);
+    r.points_body.push_back(p);
+  }
+  MappingBackend::Config cfg;
+  cfg.loop_enabled = false;
+  cfg.map_leaf_m = 0.0;  // every point
+  cfg.map_point_stride = 1;
+  cfg.per_lidar_maps = true;
+  MappingBackend backend(cfg);
+  backend.addSweep(r);
+  const auto names = backend.lidarNames();
+  ASSERT_EQ(names.size(), 2u);
+  const auto velodyne = backend.lidarMap("velodyne"), livox = backend.lidarMap("livox");
+  ASSERT_EQ(velodyne.size(), 30u);
+  ASSERT_EQ(livox.size(), 20u);
+  for (const Point& p : velodyne) EXPECT_FLOAT_EQ(p.xyz.x(), 5.f);
+  for (const Point& p : livox) EXPECT_FLOAT_EQ(p.xyz.x(), -5.f);
+  EXPECT_EQ(backend.map().size(), 50u);
+  EXPECT_TRUE(backend.lidarMap("ouster").empty());
+
+  cfg.per_lidar_maps = false;
+  MappingBackend merged(cfg);
+  merged.addSweep(r);
+  EXPECT_TRUE(merged.lidarNames().empty());
+  EXPECT_EQ(merged.map().size(), 50u);
+}
+
 }  // namespace
 }  // namespace mmlio::pipeline

@@ -3,7 +3,9 @@
 // trajectory corrected by it, and the high-resolution map built from per-keyframe submaps at
 // their corrected poses (each sweep's points are stored once, voxel-averaged, in the frame of
 // its keyframe, so memory grows with the mapped surface).
+#include <map>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "mmlio/backend/loop_closer.hpp"
@@ -26,6 +28,7 @@ class MappingBackend {
     double max_drift_fraction = 0.02;         // ... plus this fraction of the path since the match
     int map_point_stride = 4;            // each sweep adds every n-th point (offset rotates per sweep):
                                          // overlapping sweeps still fill every voxel, at 1/n the cost
+    bool per_lidar_maps = false;         // keep each LiDAR's points apart too (lidarMap)
   };
 
   explicit MappingBackend(Config cfg);
@@ -39,6 +42,9 @@ class MappingBackend {
 
   Trajectory correctedTrajectory() const;
   std::vector<Point> map() const;
+  /// With per_lidar_maps: the names of the LiDARs seen, and one LiDAR's map (empty if unknown).
+  std::vector<std::string> lidarNames() const;
+  std::vector<Point> lidarMap(const std::string& lidar) const;
   std::size_t keyframes() const;
   std::size_t loops() const;
   /// {keyframes, loop_attempts, loops: [{query_s, match_s, fitness_m, overlap}], rejected}
@@ -51,7 +57,10 @@ class MappingBackend {
   Config cfg_;
   backend::PoseGraph graph_;
   std::unique_ptr<backend::LoopCloser> closer_;
-  std::vector<std::unique_ptr<MapAccumulator>> submaps_;  // one per keyframe, keyframe frame
+  // One submap per keyframe (in its frame), one accumulator per LiDAR in it ("" = all LiDARs).
+  using Submap = std::map<std::string, MapAccumulator>;
+  std::vector<Submap> submaps_;
+  std::vector<Point> mergedMap(const std::string* only_lidar) const;
   Trajectory odometry_;
   Eigen::Isometry3d T_world_keyframe_ = Eigen::Isometry3d::Identity();
   std::size_t loop_attempts_ = 0;
