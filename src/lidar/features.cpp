@@ -120,19 +120,8 @@ void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConf
       const double c = sum.squaredNorm() / sq;
       cand[i].curvature = c;
       if (c > cfg.edge_threshold) {
-        // Line edge only if the two halves are lines meeting at an angle (not one noisy point).
-        Eigen::Vector3d ev;
-        Eigen::Matrix3d evec;
-        for (int k = 0; k <= K; ++k) buf[k] = P[i - k * stride];
-        scatter(buf.data(), K + 1, &ev, &evec);
-        const Eigen::Vector3d dl = evec.col(2);
-        for (int k = 0; k <= K; ++k) buf[k] = P[i + k * stride];
-        scatter(buf.data(), K + 1, &ev, &evec);
-        const Eigen::Vector3d dr = evec.col(2);
-        // The arms must not fold back onto each other (a Livox line turning round, a thin spike).
-        const Eigen::Vector3d arm_l = P[lo] - centre, arm_r = P[hi] - centre;
-        const bool folded = arm_l.dot(arm_r) > kMaxArmCos * arm_l.norm() * arm_r.norm();
-        if (!folded && std::abs(dl.dot(dr)) < min_bend_cos) cand[i].label = Label::kEdge;
+        cand[i].label = Label::kEdge;  // the line-edge shape is checked only for the points picked below
+        cand[i].stride = stride;
       } else if (c < cfg.plane_threshold) {
         cand[i].label = Label::kPlane;  // flatness is checked only for the points picked below
         cand[i].stride = stride;
@@ -148,6 +137,24 @@ void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConf
     }
   }
 
+  // Line edge only if the two halves are lines meeting at an angle (not one noisy point). Two
+  // eigen decompositions per point: evaluated only for the candidates the picking reaches.
+  const auto isLineEdge = [&](int i, int stride) {
+    const Eigen::Vector3d centre = (prefix[i + stride] - prefix[i - stride + 1]) / (2 * stride - 1);
+    Eigen::Vector3d ev;
+    Eigen::Matrix3d evec;
+    for (int k = 0; k <= K; ++k) buf[k] = P[i - k * stride];
+    scatter(buf.data(), K + 1, &ev, &evec);
+    const Eigen::Vector3d dl = evec.col(2);
+    for (int k = 0; k <= K; ++k) buf[k] = P[i + k * stride];
+    scatter(buf.data(), K + 1, &ev, &evec);
+    const Eigen::Vector3d dr = evec.col(2);
+    // The arms must not fold back onto each other (a Livox line turning round, a thin spike).
+    const Eigen::Vector3d arm_l = P[i - K * stride] - centre, arm_r = P[i + K * stride] - centre;
+    const bool folded = arm_l.dot(arm_r) > kMaxArmCos * arm_l.norm() * arm_r.norm();
+    return !folded && std::abs(dl.dot(dr)) < min_bend_cos;
+  };
+
   // LOAM-style spreading: per sector, sharpest edges first with neighbour suppression, flattest planes.
   const int sectors = std::max(1, cfg.sectors_per_line);
   std::vector<char> suppressed(P.size(), 0);
@@ -162,6 +169,7 @@ void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConf
     for (int i : order) {
       if (picked >= cfg.max_edges_per_sector) break;
       if (suppressed[i]) continue;
+      if (cand[i].label == Label::kEdge && !isLineEdge(i, cand[i].stride)) continue;
       edges->push_back(static_cast<std::size_t>(i));
       ++picked;
       for (int k = std::max(0, i - span_of[i]); k <= std::min(n - 1, i + span_of[i]); ++k) suppressed[k] = 1;
