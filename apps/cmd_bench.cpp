@@ -8,6 +8,7 @@
 
 #include "commands.hpp"
 #include "mmlio/core/timer.hpp"
+#include "mmlio/io/calib_file.hpp"
 #include "mmlio/io/rig_config.hpp"
 #include "mmlio/pipeline/runner.hpp"
 
@@ -15,7 +16,7 @@ namespace mmlio::apps {
 namespace {
 
 struct BenchArgs {
-  std::string bag, config, mode;
+  std::string bag, config, mode, calib;
   int repeat = 1;
 };
 
@@ -29,6 +30,7 @@ void bench(const BenchArgs& a) {
   pipeline::RunOptions options;
   options.bag_path = a.bag;
   if (!a.config.empty()) options.config = io::loadRigConfig(a.config);
+  if (!a.calib.empty()) io::applyCalibration(options.config, io::readCalibration(a.calib));
   options.mode = a.mode;
   options.progress = false;
   for (int pass = 1; pass <= a.repeat; ++pass) {
@@ -52,6 +54,8 @@ void registerBenchCommand(CLI::App& app) {
   cmd->add_option("bag", args->bag, "Input ROS1 bag (e.g. from `mmlio simulate`)")->required()->check(CLI::ExistingFile);
   cmd->add_option("-c,--config", args->config, "Rig config YAML (default: built-in)")->check(CLI::ExistingFile);
   cmd->add_option("-m,--mode", args->mode, "hvi | vi | hi")->check(CLI::IsMember({"hvi", "vi", "hi"}));
+  cmd->add_option("--calib", args->calib, "Calibration YAML overriding the config's extrinsics (as `mmlio run --calib`)")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--repeat", args->repeat, "Passes over the bag (memory must stay flat)")->check(CLI::PositiveNumber);
   cmd->callback([args] { bench(*args); });
 }

@@ -181,6 +181,15 @@ struct Odometry::Impl {
     });
 
     std::vector<Point> edges, planes;
+    std::size_t n_edges = 0, n_planes = 0, n_points = 0;
+    for (std::size_t i = 0; i < scans.size(); ++i) {
+      n_edges += clouds[i].edges.size();
+      n_planes += clouds[i].planes.size();
+      n_points += deskewed[i].points.size();
+    }
+    edges.reserve(n_edges);
+    planes.reserve(n_planes);
+    if (cfg.keep_points) out->points_body.reserve(n_points);
     for (std::size_t i = 0; i < scans.size(); ++i) {
       const Eigen::Isometry3f T = setupOf(scans[i]->sensor)->extrinsic.T_imu_sensor.cast<float>();
       auto toBody = [&T](std::vector<Point>& pts, std::vector<Point>* dst) {

@@ -16,6 +16,17 @@ bool valid(const Point& p, double min_range_m) {
 }
 
 double azimuth(const Point& p) { return std::atan2(static_cast<double>(p.xyz.y()), static_cast<double>(p.xyz.x())); }
+
+/// A strictly increasing function of the azimuth on (-pi, pi] (the "diamond angle", in (-2, 2]):
+/// sorting by it orders a ring exactly as sorting by atan2 would, without the atan2.
+double azimuthOrderKey(const Point& p) {
+  const double x = p.xyz.x(), y = p.xyz.y();
+  const double l1 = std::abs(x) + std::abs(y);
+  if (l1 <= 0.0) return 0.0;
+  const double t = y / l1;                    // sin-like, in [-1, 1]
+  if (x >= 0.0) return t;                     // (-pi/2, pi/2) -> (-1, 1)
+  return y >= 0.0 ? 2.0 - t : -2.0 - t;       // (pi/2, pi] -> (1, 2]; (-pi, -pi/2) -> (-2, -1)
+}
 double elevationDeg(const Point& p) {
   const Eigen::Vector3d v = p.xyz.cast<double>();
   return std::atan2(v.z(), v.head<2>().norm()) * 180.0 / M_PI;
@@ -27,7 +38,7 @@ void orderLine(const LidarScan& scan, bool spinning, std::vector<std::size_t>* l
   if (spinning) {
     std::vector<std::pair<double, std::size_t>> keyed;
     keyed.reserve(line->size());
-    for (std::size_t i : *line) keyed.emplace_back(azimuth(scan.points[i]), i);
+    for (std::size_t i : *line) keyed.emplace_back(azimuthOrderKey(scan.points[i]), i);
     std::stable_sort(keyed.begin(), keyed.end(),
                      [](const auto& a, const auto& b) { return a.first < b.first; });
     for (std::size_t k = 0; k < keyed.size(); ++k) (*line)[k] = keyed[k].second;

@@ -74,13 +74,28 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
     for (const auto& [key, bucket] : voxels_) visit(key);
   } else {
     const int max_ring = std::max(1, static_cast<int>(rings));
+    // Squared distance from q to the voxel `offset` cells from q's own along one axis.
+    const auto axisGap = [this](double coord, int cell, int offset) {
+      if (offset == 0) return 0.0;
+      const double face = (offset > 0 ? cell + offset : cell + offset + 1) * voxel_m_;
+      const double d = offset > 0 ? face - coord : coord - face;
+      return d * d;
+    };
     for (int r = 0; r <= max_ring; ++r) {
-      for (int dx = -r; dx <= r; ++dx)
-        for (int dy = -r; dy <= r; ++dy)
+      for (int dx = -r; dx <= r; ++dx) {
+        const double gx = axisGap(q.x(), c.x, dx);
+        for (int dy = -r; dy <= r; ++dy) {
+          const double gxy = gx + axisGap(q.y(), c.y, dy);
           for (int dz = -r; dz <= r; ++dz) {
             if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r) continue;  // shell only
+            // A voxel that cannot hold a point nearer than the current k-th best (or within
+            // max_dist_m) is not looked up: the hash lookups are most of the cost of a query.
+            const double gap2 = gxy + axisGap(q.z(), c.z, dz);
+            if (gap2 > max_d2 || (static_cast<int>(best.size()) == k && gap2 >= best.front().first)) continue;
             visit(Key{c.x + dx, c.y + dy, c.z + dz});
           }
+        }
+      }
       if (r >= 1 && static_cast<int>(best.size()) == k) {
         const double covered = r * voxel_m_;
         if (best.front().first <= covered * covered) break;
