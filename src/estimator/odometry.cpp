@@ -11,7 +11,7 @@
 #include "mmlio/core/log.hpp"
 #include "mmlio/estimator/imu_factor.hpp"
 #include "mmlio/estimator/lidar_factors.hpp"
-#include "mmlio/estimator/marginalization.hpp"
+#include "mmlio/estimator/sliding_window.hpp"
 #include "mmlio/estimator/pose_manifold.hpp"
 #include "mmlio/estimator/prior_factor.hpp"
 #include "mmlio/imu/imu_integrator.hpp"
@@ -24,96 +24,9 @@
 namespace mmlio::estimator {
 namespace {
 
-constexpr double kMaxMatchDistM = 1.0;   // farther map neighbours make no correspondence
-constexpr int kNeighbours = 5;           // map points per line / plane fit
 constexpr std::size_t kMinCorrespondences = 30;
 
-// ---- parameter blocks <-> NavState ----
-struct States {
-  double pose[7];
-  double speed_bias[9];
-};
-
-void toBlocks(const NavState& s, States* b) {
-  Eigen::Map<Eigen::Vector3d>(b->pose) = s.p_world;
-  Eigen::Map<Eigen::Quaterniond>(b->pose + 3) = s.q_world_body.normalized();
-  Eigen::Map<Eigen::Vector3d>(b->speed_bias) = s.v_world;
-  Eigen::Map<Eigen::Vector3d>(b->speed_bias + 3) = s.bias.acc_m_s2;
-  Eigen::Map<Eigen::Vector3d>(b->speed_bias + 6) = s.bias.gyro_rad_s;
-}
-
-NavState fromBlocks(const States& b, Stamp stamp) {
-  NavState s;
-  s.stamp_ns = stamp;
-  s.p_world = Eigen::Map<const Eigen::Vector3d>(b.pose);
-  s.q_world_body = Eigen::Map<const Eigen::Quaterniond>(b.pose + 3).normalized();
-  s.v_world = Eigen::Map<const Eigen::Vector3d>(b.speed_bias);
-  s.bias.acc_m_s2 = Eigen::Map<const Eigen::Vector3d>(b.speed_bias + 3);
-  s.bias.gyro_rad_s = Eigen::Map<const Eigen::Vector3d>(b.speed_bias + 6);
-  return s;
-}
-
-Eigen::Isometry3d poseOf(const double* pose) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = Eigen::Map<const Eigen::Quaterniond>(pose + 3).normalized().toRotationMatrix();
-  T.translation() = Eigen::Map<const Eigen::Vector3d>(pose);
-  return T;
-}
-
 void integrateSamples(imu::Preintegration& pre, const std::vector<ImuSample>& samples) { pre.integrate(samples); }
-
-/// Body-frame features of one sweep.
-struct Features {
-  std::vector<Eigen::Vector3d> edges, planes;          // matched against the map (coarse)
-  std::vector<Eigen::Vector3d> map_edges, map_planes;  // added to the map (finer: dense, stable fits)
-};
-
-struct Keyframe {
-  Stamp stamp = 0;
-  States x;
-  Features features;
-  std::shared_ptr<imu::Preintegration> pre;  // from the previous keyframe in the window
-};
-
-/// A residual against the local map, found at the current estimate.
-struct Match {
-  int kind = 0;  // 1 plane, 2 edge
-  Eigen::Vector3d p_body, a, b;  // plane: a = normal, b.x() = d; edge: a = point, b = direction
-};
-
-std::vector<Match> findMatches(const Features& f, const Eigen::Isometry3d& T_world_body,
-                               const map::VoxelHashMap& edge_map, const map::VoxelHashMap& plane_map) {
-  const std::size_t n_planes = f.planes.size();
-  std::vector<Match> matches(n_planes + f.edges.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, matches.size(), 64), [&](const auto& range) {
-    std::vector<Eigen::Vector3d> nn;
-    for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      const bool plane = i < n_planes;
-      const Eigen::Vector3d& p = plane ? f.planes[i] : f.edges[i - n_planes];
-      const Eigen::Vector3d q = T_world_body * p;
-      Match& m = matches[i];
-      if (plane) {
-        if (plane_map.knn(q, kNeighbours, kMaxMatchDistM, &nn) < kNeighbours) continue;
-        const map::PlaneFit fit = map::fitPlane(nn, 0.1);
-        if (!fit.ok) continue;
-        m = {1, p, fit.normal, Eigen::Vector3d(fit.d, 0, 0)};
-      } else {
-        if (edge_map.knn(q, kNeighbours, kMaxMatchDistM, &nn) < kNeighbours) continue;
-        const map::LineFit fit = map::fitLine(nn, 3.0);
-        if (!fit.ok) continue;
-        m = {2, p, fit.point, fit.direction};
-      }
-    }
-  });
-  matches.erase(std::remove_if(matches.begin(), matches.end(), [](const Match& m) { return m.kind == 0; }),
-                matches.end());
-  return matches;
-}
-
-ceres::CostFunction* lidarCost(const Match& m, double weight) {
-  if (m.kind == 1) return new PointToPlaneFactor(m.p_body, m.a, m.b.x(), weight);
-  return new PointToEdgeFactor(m.p_body, m.a, m.b, weight);
-}
 
 }  // namespace
 
@@ -129,9 +42,7 @@ struct Odometry::Impl {
 
   NavState last;  // at the end of the last processed sweep
   map::VoxelHashMap edge_map, plane_map;
-  std::deque<Keyframe> window;
-  std::shared_ptr<MarginalizationInfo> prior;
-  std::vector<double*> prior_blocks;
+  SlidingWindow window;
   std::shared_ptr<imu::Preintegration> pre_since_keyframe;
   std::size_t keyframes = 0;
   ceres::Manifold* pose_manifold = nullptr;  // owned by the problems (kept alive separately)
@@ -145,7 +56,17 @@ struct Odometry::Impl {
         // matters where features are far and sparse (hall registration 231 -> 47 ms/sweep with the
         // same accuracy: ATE 1.37 -> 1.43 cm hall, 1.01 -> 1.00 cm office).
         edge_map(2.5 * cfg.map_voxel_m, 60),
-        plane_map(2.5 * cfg.map_voxel_m, 60) {}
+        plane_map(2.5 * cfg.map_voxel_m, 60),
+        window(windowConfig(cfg), g_world) {}
+
+  static SlidingWindowConfig windowConfig(const OdometryConfig& c) {
+    SlidingWindowConfig w;
+    w.size = c.window_size;
+    w.max_iterations = c.max_iterations;
+    w.lidar_sigma_m = c.lidar_sigma_m;
+    w.huber_loss_m = c.huber_loss_m;
+    return w;
+  }
 
   std::vector<ImuSample> imuBuffer() const { return {imu.begin(), imu.end()}; }
 
@@ -220,35 +141,16 @@ struct Odometry::Impl {
     return f;
   }
 
-  void addLidarResiduals(ceres::Problem& problem, double* pose, const std::vector<Match>& matches) {
-    const double w = 1.0 / cfg.lidar_sigma_m;
-    for (const Match& m : matches) {
-      problem.AddResidualBlock(lidarCost(m, w), new ceres::HuberLoss(cfg.huber_loss_m * w), pose);
-    }
-  }
-
-  ceres::Solver::Options solverOptions(int iterations) const {
-    ceres::Solver::Options o;
-    o.linear_solver_type = ceres::DENSE_SCHUR;
-    o.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-    o.max_num_iterations = iterations;
-    o.num_threads = 1;
-    o.minimizer_progress_to_stdout = false;
-    return o;
-  }
-
   // ---- stage: scan-to-map registration of one sweep with an IMU factor to the previous one ----
   std::size_t registerSweep(const Features& f, const std::shared_ptr<imu::Preintegration>& pre, const NavState& prev,
                             NavState* state) {
-    States xi, xj;
-    toBlocks(prev, &xi);
-    toBlocks(*state, &xj);
+    StateBlocks xi = toBlocks(prev), xj = toBlocks(*state);
     double prev_sb[9];
     std::copy(xi.speed_bias, xi.speed_bias + 9, prev_sb);
     std::size_t used = 0;
     const int rounds = std::max(1, cfg.match_rounds);
     for (int round = 0; round < rounds; ++round) {
-      const std::vector<Match> matches = findMatches(f, poseOf(xj.pose), edge_map, plane_map);
+      const std::vector<MapMatch> matches = findMapMatches(f, poseOf(xj.pose), edge_map, plane_map);
       used = matches.size();
       if (used < kMinCorrespondences) return used;
       ceres::Problem::Options po;
@@ -264,9 +166,9 @@ struct Odometry::Impl {
       problem.AddResidualBlock(new SpeedBiasPrior(prev_sb, cfg.prior_sigma_v_m_s, cfg.prior_sigma_ba, cfg.prior_sigma_bg),
                                nullptr, xi.speed_bias);
       problem.AddResidualBlock(new ImuFactor(pre, g_world), nullptr, xi.pose, xi.speed_bias, xj.pose, xj.speed_bias);
-      addLidarResiduals(problem, xj.pose, matches);
+      addMapResiduals(problem, xj.pose, matches, cfg.lidar_sigma_m, cfg.huber_loss_m);
       ceres::Solver::Summary summary;
-      ceres::Solve(solverOptions(std::max(2, cfg.max_iterations / rounds)), &problem, &summary);
+      ceres::Solve(odometrySolverOptions(std::max(2, cfg.max_iterations / rounds)), &problem, &summary);
     }
     *state = fromBlocks(xj, state->stamp_ns);
     return used;
@@ -280,64 +182,7 @@ struct Odometry::Impl {
            toSec(s.stamp_ns - k.stamp_ns) > cfg.keyframe_interval_s;
   }
 
-  // ---- stage: sliding window over keyframes (edges, planes, IMU, marginalisation prior) ----
-  void optimizeWindow() {
-    if (window.size() < 2) return;
-    ceres::Problem::Options po;
-    po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-    ceres::Problem problem(po);
-    PoseManifold manifold;
-    for (auto& kf : window) {
-      problem.AddParameterBlock(kf.x.pose, 7, &manifold);
-      problem.AddParameterBlock(kf.x.speed_bias, 9);
-    }
-    if (prior && prior->valid()) {
-      problem.AddResidualBlock(new MarginalizationFactor(prior), nullptr, prior_blocks);
-    } else {
-      // Gauge: without a prior, the oldest keyframe anchors the window.
-      problem.SetParameterBlockConstant(window.front().x.pose);
-    }
-    for (std::size_t i = 1; i < window.size(); ++i) {
-      problem.AddResidualBlock(new ImuFactor(window[i].pre, g_world), nullptr, window[i - 1].x.pose,
-                               window[i - 1].x.speed_bias, window[i].x.pose, window[i].x.speed_bias);
-    }
-    for (auto& kf : window) {
-      addLidarResiduals(problem, kf.x.pose, findMatches(kf.features, poseOf(kf.x.pose), edge_map, plane_map));
-    }
-    ceres::Solver::Summary summary;
-    ceres::Solve(solverOptions(cfg.max_iterations), &problem, &summary);
-  }
-
-  void marginalizeOldest() {
-    if (window.size() <= static_cast<std::size_t>(std::max(cfg.window_size, 2))) return;
-    Keyframe& old = window[0];
-    Keyframe& next = window[1];
-    auto info = std::make_shared<MarginalizationInfo>();
-    if (prior && prior->valid()) {
-      std::vector<int> drop;
-      for (std::size_t i = 0; i < prior_blocks.size(); ++i)
-        if (prior_blocks[i] == old.x.pose || prior_blocks[i] == old.x.speed_bias) drop.push_back(static_cast<int>(i));
-      info->addResidualBlock({new MarginalizationFactor(prior), nullptr, prior_blocks, drop});
-    }
-    info->addResidualBlock({new ImuFactor(next.pre, g_world), nullptr,
-                            {old.x.pose, old.x.speed_bias, next.x.pose, next.x.speed_bias}, {0, 1}});
-    const double w = 1.0 / cfg.lidar_sigma_m;
-    for (const Match& m : findMatches(old.features, poseOf(old.x.pose), edge_map, plane_map)) {
-      info->addResidualBlock({lidarCost(m, w), new ceres::HuberLoss(cfg.huber_loss_m * w), {old.x.pose}, {0}});
-    }
-    info->preMarginalize();
-    info->marginalize();
-    std::unordered_map<long, double*> same_address;
-    for (std::size_t i = 1; i < window.size(); ++i) {
-      same_address[reinterpret_cast<long>(window[i].x.pose)] = window[i].x.pose;
-      same_address[reinterpret_cast<long>(window[i].x.speed_bias)] = window[i].x.speed_bias;
-    }
-    prior_blocks = info->keptBlockAddresses(same_address);
-    prior = info;
-    window.pop_front();  // deque: the other keyframes' parameter addresses stay valid
-  }
-
-  void addToMap(const Keyframe& kf) {
+  void addToMap(const WindowKeyframe& kf) {
     const Eigen::Isometry3d T = poseOf(kf.x.pose);
     std::vector<Eigen::Vector3d> e, p;
     e.reserve(kf.features.map_edges.size());
@@ -431,8 +276,6 @@ SweepResult Odometry::process(const lidar::AlignedSweep& sweep) {
     out.note = "no IMU over the sweep: constant-velocity prediction";
     // The keyframe preintegration now misses an interval: restart the window (the map stays).
     d.window.clear();
-    d.prior.reset();
-    d.prior_blocks.clear();
     d.pre_since_keyframe.reset();
     log::emit(log::Level::kWarn, "no IMU data over the sweep ending at ", toSec(sweep.end_ns), " s");
   }
@@ -457,16 +300,16 @@ SweepResult Odometry::process(const lidar::AlignedSweep& sweep) {
   // ---- keyframe, sliding window, map ----
   out.keyframe = d.isKeyframe(state) || d.plane_map.empty();
   if (out.keyframe && tracked && (imu_ok || d.window.empty())) {
-    Keyframe kf;
+    WindowKeyframe kf;
     kf.stamp = state.stamp_ns;
-    toBlocks(state, &kf.x);
+    kf.x = toBlocks(state);
     kf.features = std::move(features);
     kf.pre = d.pre_since_keyframe;
     if (!d.window.empty() && !kf.pre) kf.pre = pre;
-    d.window.push_back(std::move(kf));
-    d.optimizeWindow();
+    d.window.push(std::move(kf));
+    d.window.optimize(d.edge_map, d.plane_map);
     out.times_ms.emplace_back("window", watch.lapMs());
-    d.marginalizeOldest();
+    d.window.marginalizeOldest(d.edge_map, d.plane_map);
     out.times_ms.emplace_back("marginalize", watch.lapMs());
     d.addToMap(d.window.back());
     state = fromBlocks(d.window.back().x, state.stamp_ns);

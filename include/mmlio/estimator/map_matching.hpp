@@ -1,0 +1,41 @@
+#pragma once
+// Correspondences of body-frame feature points with the local map, found at a pose estimate:
+// each edge point gets the line through its k nearest edge-map points, each plane point the
+// plane through its k nearest plane-map points (paper eqs. edge_cost / plane_cost). The residuals
+// themselves are PointToEdgeFactor / PointToPlaneFactor (lidar_factors.hpp).
+#include <ceres/cost_function.h>
+
+#include <Eigen/Geometry>
+#include <vector>
+
+#include "mmlio/map/voxel_hash_map.hpp"
+
+namespace mmlio::estimator {
+
+/// Body-frame features of one sweep.
+struct Features {
+  std::vector<Eigen::Vector3d> edges, planes;          // matched against the map
+  std::vector<Eigen::Vector3d> map_edges, map_planes;  // added to the map
+};
+
+/// A residual against the local map, found at the current estimate.
+struct MapMatch {
+  enum class Kind { kPlane, kEdge };
+  Kind kind = Kind::kPlane;
+  Eigen::Vector3d p_body;
+  Eigen::Vector3d a, b;  // plane: a = unit normal, b.x() = d (n.x + d = 0); edge: a = point, b = direction
+};
+
+struct MapMatchConfig {
+  double max_distance_m = 1.0;  // farther map neighbours make no correspondence
+  int neighbours = 5;           // map points per line / plane fit
+};
+
+std::vector<MapMatch> findMapMatches(const Features& f, const Eigen::Isometry3d& T_world_body,
+                                     const map::VoxelHashMap& edge_map, const map::VoxelHashMap& plane_map,
+                                     const MapMatchConfig& cfg = MapMatchConfig());
+
+/// The point-to-plane / point-to-edge residual of a match on one pose block, whitened by weight.
+ceres::CostFunction* mapMatchCost(const MapMatch& m, double weight);
+
+}  // namespace mmlio::estimator

@@ -1,0 +1,52 @@
+#include "mmlio/estimator/map_matching.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+
+#include "mmlio/estimator/lidar_factors.hpp"
+#include "mmlio/map/geometry_fit.hpp"
+
+namespace mmlio::estimator {
+
+std::vector<MapMatch> findMapMatches(const Features& f, const Eigen::Isometry3d& T_world_body,
+                                     const map::VoxelHashMap& edge_map, const map::VoxelHashMap& plane_map,
+                                     const MapMatchConfig& cfg) {
+  const std::size_t n_planes = f.planes.size();
+  std::vector<MapMatch> matches(n_planes + f.edges.size());
+  std::vector<char> found(matches.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, matches.size(), 64), [&](const auto& range) {
+    std::vector<Eigen::Vector3d> nn;
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      const bool plane = i < n_planes;
+      const Eigen::Vector3d& p = plane ? f.planes[i] : f.edges[i - n_planes];
+      const Eigen::Vector3d q = T_world_body * p;
+      MapMatch& m = matches[i];
+      if (plane) {
+        if (plane_map.knn(q, cfg.neighbours, cfg.max_distance_m, &nn) < cfg.neighbours) continue;
+        const map::PlaneFit fit = map::fitPlane(nn, 0.1);
+        if (!fit.ok) continue;
+        m = {MapMatch::Kind::kPlane, p, fit.normal, Eigen::Vector3d(fit.d, 0, 0)};
+      } else {
+        if (edge_map.knn(q, cfg.neighbours, cfg.max_distance_m, &nn) < cfg.neighbours) continue;
+        const map::LineFit fit = map::fitLine(nn, 3.0);
+        if (!fit.ok) continue;
+        m = {MapMatch::Kind::kEdge, p, fit.point, fit.direction};
+      }
+      found[i] = 1;
+    }
+  });
+  std::vector<MapMatch> out;
+  out.reserve(matches.size());
+  for (std::size_t i = 0; i < matches.size(); ++i)
+    if (found[i]) out.push_back(matches[i]);
+  return out;
+}
+
+ceres::CostFunction* mapMatchCost(const MapMatch& m, double weight) {
+  if (m.kind == MapMatch::Kind::kPlane) return new PointToPlaneFactor(m.p_body, m.a, m.b.x(), weight);
+  return new PointToEdgeFactor(m.p_body, m.a, m.b, weight);
+}
+
+}  // namespace mmlio::estimator
