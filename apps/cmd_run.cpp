@@ -1,4 +1,5 @@
 // mmlio run BAG: the main job, bag in -> trajectory, map and report out.
+#include <filesystem>
 #include <iostream>
 #include <memory>
 
@@ -7,6 +8,7 @@
 #include "mmlio/core/log.hpp"
 #include "mmlio/io/calib_file.hpp"
 #include "mmlio/io/rig_config.hpp"
+#include "mmlio/pipeline/bag_calibration.hpp"
 #include "mmlio/pipeline/runner.hpp"
 
 namespace mmlio::apps {
@@ -18,12 +20,19 @@ struct RunArgs {
   double duration_s = 0.0;
 };
 
-/// Applies `calibration:` from the config or --calib (which wins).
-void applyCalibrationSource(io::RigConfig& cfg, const std::string& calib_override) {
+/// Applies `calibration:` from the config or --calib (which wins). `auto` calibrates on the bag's
+/// start and writes the result to OUT/calib.yaml.
+void applyCalibrationSource(io::RigConfig& cfg, const std::string& calib_override, const std::string& bag,
+                            const std::string& out_dir) {
   std::string source = calib_override.empty() ? cfg.calibration : calib_override;
   if (source == "config") return;
   if (source == "auto") {
-    throw Error("calibration: auto is not available yet; run `mmlio calibrate` and pass --calib FILE");
+    const pipeline::BagCalibrationResult r = pipeline::calibrateBag(bag, cfg);
+    io::applyCalibration(cfg, r.calibration);
+    std::filesystem::create_directories(out_dir);
+    io::writeCalibration(out_dir + "/calib.yaml", r.calibration, r.extra);
+    log::emit(log::Level::kInfo, "calibration: auto -> ", out_dir, "/calib.yaml");
+    return;
   }
   const io::Calibration calibration = io::readCalibration(source);
   const auto uncovered = io::applyCalibration(cfg, calibration);
@@ -42,7 +51,7 @@ void run(const RunArgs& a) {
     cfg = io::loadRigConfig(a.config);
   }
   if (a.no_loop) cfg.loop.enabled = false;
-  applyCalibrationSource(cfg, a.calib);
+  applyCalibrationSource(cfg, a.calib, a.bag, a.out);
 
   pipeline::RunOptions options;
   options.bag_path = a.bag;
@@ -72,8 +81,8 @@ void registerRunCommand(CLI::App& app) {
   cmd->add_option("-o,--out", args->out, "Output directory")->capture_default_str();
   cmd->add_option("-m,--mode", args->mode, "Sensor mode: hvi | vi | hi (default: the config's)")
       ->check(CLI::IsMember({"hvi", "vi", "hi"}));
-  cmd->add_option("--calib", args->calib, "Calibration YAML overriding extrinsics and clock offsets")
-      ->check(CLI::ExistingFile);
+  cmd->add_option("--calib", args->calib, "Calibration YAML overriding extrinsics and clock offsets, or auto")
+      ->check(CLI::ExistingFile | CLI::IsMember({"auto"}));
   cmd->add_option("--gt", args->gt, "Ground-truth TUM trajectory: adds the evaluation to the report")
       ->check(CLI::ExistingFile);
   cmd->add_option("--duration", args->duration_s, "Stop after this many seconds of the bag");

@@ -9,4 +9,5 @@ void registerSimulateCommand(CLI::App& app);
 void registerEvaluateCommand(CLI::App& app);
 void registerRunCommand(CLI::App& app);
 void registerBenchCommand(CLI::App& app);
+void registerCalibrateCommand(CLI::App& app);
 }  // namespace mmlio::apps

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   mmlio::apps::registerRunCommand(app);
   mmlio::apps::registerEvaluateCommand(app);
   mmlio::apps::registerBenchCommand(app);
+  mmlio::apps::registerCalibrateCommand(app);
 
   try {
     app.parse(argc, argv);

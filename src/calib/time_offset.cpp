@@ -72,24 +72,26 @@ std::vector<SensorRotation> sweepRotations(const std::vector<LidarScan>& sweeps,
     return v;
   };
   Eigen::Isometry3d prior = Eigen::Isometry3d::Identity();
-  std::vector<LidarScan> fixed;
-  if (deskew)
-    for (const LidarScan& s : sweeps) fixed.push_back(s.points.empty() ? s : gyroDeskewed(s, *deskew));
-  const std::vector<LidarScan>& use = deskew ? fixed : sweeps;
+  // With de-skew, each sweep is corrected once, when it first appears in a pair (no copies of all).
+  const auto prepared = [&](const LidarScan& s) { return deskew && !s.points.empty() ? gyroDeskewed(s, *deskew) : s; };
   const auto stamp = [&](const LidarScan& s) { return deskew ? endStamp(s) : midStamp(s); };
-  for (std::size_t k = 0; k + 1 < use.size(); ++k) {
-    if (use[k].points.empty() || use[k + 1].points.empty()) continue;
+  LidarScan current = sweeps.empty() ? LidarScan{} : prepared(sweeps[0]);
+  for (std::size_t k = 0; k + 1 < sweeps.size(); ++k) {
+    LidarScan next = prepared(sweeps[k + 1]);
     // Sweeps that are not consecutive (a gap in a selection) make no pair.
-    if (toSec(use[k + 1].start_ns - use[k].start_ns) > 0.15) continue;
-    const backend::IcpTarget target(backend::voxelCentroids(toVec(use[k]), icp.voxel_fine_m));
-    const backend::IcpResult r = backend::alignPointToPlane(toVec(use[k + 1]), target, prior, icp);
-    if (!r.converged) {
-      prior = Eigen::Isometry3d::Identity();
-      continue;
+    const bool pair = !current.points.empty() && !next.points.empty() &&
+                      toSec(sweeps[k + 1].start_ns - sweeps[k].start_ns) <= 0.15;
+    if (pair) {
+      const backend::IcpTarget target(backend::voxelCentroids(toVec(current), icp.voxel_fine_m));
+      const backend::IcpResult r = backend::alignPointToPlane(toVec(next), target, prior, icp);
+      if (r.converged) {
+        prior = r.T_target_source;  // the next pair moves about the same
+        out.push_back({stamp(current), stamp(next), so3::log(Eigen::Quaterniond(r.T_target_source.rotation()).normalized())});
+      } else {
+        prior = Eigen::Isometry3d::Identity();
+      }
     }
-    prior = r.T_target_source;  // the next pair moves about the same
-    out.push_back({stamp(use[k]), stamp(use[k + 1]),
-                   so3::log(Eigen::Quaterniond(r.T_target_source.rotation()).normalized())});
+    current = std::move(next);
   }
   return out;
 }

@@ -1,0 +1,43 @@
+#pragma once
+// `mmlio calibrate` and `calibration: auto`: the spinning LiDAR's extrinsic and clock offset from
+// the start of a bag (calib::calibrateSpinningToSolid on the stationary start, then
+// calib::calibrateTimeOffset on the first turns). The solid-state LiDAR keeps its factory
+// extrinsic from the config (its IMU is the reference), so the result chains
+// T_imu_spinning = T_imu_solid * T_solid_spinning.
+#include <string>
+
+#include "mmlio/calib/spatial_calibration.hpp"
+#include "mmlio/calib/time_offset.hpp"
+#include "mmlio/io/calib_file.hpp"
+#include "mmlio/io/rig_config.hpp"
+#include "mmlio/pipeline/json.hpp"
+
+namespace mmlio::pipeline {
+
+struct BagCalibrationOptions {
+  int solid_frames = 10;              // solid-state frames accumulated at the stationary start (n)
+  int spinning_sweeps = 10;           // spinning sweeps stacked in the same window
+  double max_rest_gyro_rad_s = 0.05;  // stationary: every 50 ms gyro mean within this of the window's
+  double max_rest_acc_m_s2 = 0.3;     // ... and every 50 ms accelerometer mean within this
+  bool estimate_time_offset = true;
+  double temporal_window_s = 40.0;    // bag time after the start searched for turns
+  calib::SpatialCalibrationConfig spatial;
+  calib::TimeOffsetConfig temporal;
+};
+
+struct BagCalibrationResult {
+  io::Calibration calibration;        // both LiDARs, ready for io::applyCalibration / writeCalibration
+  std::string spinning, solid;        // their names
+  calib::SpatialCalibrationResult spatial;
+  calib::TimeOffsetResult temporal;   // temporal.ok == false: the config's clock offset was kept
+  Json report;                        // what was measured, for report.json
+  YAML::Node extra;                   // fitness, overlap, points, offset sigma: for writeCalibration
+};
+
+/// Throws mmlio::Error with a one-line reason when it cannot calibrate: the config lacks a spinning
+/// or a solid-state LiDAR, the rig moves during the stationary window, too few points, no overlap,
+/// GICP refuses.
+BagCalibrationResult calibrateBag(const std::string& bag_path, const io::RigConfig& cfg,
+                                  const BagCalibrationOptions& options = BagCalibrationOptions());
+
+}  // namespace mmlio::pipeline

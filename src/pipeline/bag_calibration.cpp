@@ -1,0 +1,194 @@
+#include "mmlio/pipeline/bag_calibration.hpp"
+
+#include <cmath>
+#include <deque>
+#include <sstream>
+
+#include "mmlio/core/error.hpp"
+#include "mmlio/core/log.hpp"
+#include "mmlio/io/bag_source.hpp"
+
+namespace mmlio::pipeline {
+namespace {
+
+std::string fmt(double v, int precision = 3) {
+  std::ostringstream os;
+  os.precision(precision);
+  os << v;
+  return os.str();
+}
+
+Json matrixRows(const Eigen::Isometry3d& T) {
+  Json rows = Json::array();
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) rows.push_back(T.matrix()(r, c));
+  return rows;
+}
+
+struct Collected {
+  std::vector<ImuSample> imu;
+  std::vector<LidarScan> solid_frames, spinning_rest, spinning_all;
+  Stamp start_ns = 0;
+};
+
+constexpr double kTurnMarginS = 0.35;  // > the offset search range + a sweep: pairs stay together
+
+/// Whether the gyro (its mean removed) turns faster than rate_rad_s within margin_s of a sweep.
+bool turningNear(const std::vector<ImuSample>& imu, Stamp sweep_start, double margin_s, double rate_rad_s) {
+  if (imu.size() < 2) return false;
+  // The bias is a few mrad/s: irrelevant against the turn rates that carry timing information.
+  const Stamp lo = sweep_start - fromSec(margin_s), hi = sweep_start + fromSec(0.1 + margin_s);
+  for (auto it = imu.rbegin(); it != imu.rend() && it->stamp_ns >= lo; ++it)
+    if (it->stamp_ns <= hi && it->gyro_rad_s.norm() > rate_rad_s) return true;
+  return false;
+}
+
+}  // namespace
+
+BagCalibrationResult calibrateBag(const std::string& bag_path, const io::RigConfig& cfg_in,
+                                  const BagCalibrationOptions& opt) {
+  BagCalibrationResult res;
+  const io::LidarConfig *spinning = nullptr, *solid = nullptr;
+  for (const io::LidarConfig& l : cfg_in.lidars) {
+    if (l.kind() == LidarKind::kSpinning && !spinning) spinning = &l;
+    if (l.kind() == LidarKind::kSolidState && !solid) solid = &l;
+  }
+  if (!spinning || !solid)
+    throw Error("calibration needs one spinning and one solid-state LiDAR in the config (found " +
+                std::string(spinning ? "a spinning one" : "no spinning one") + " and " +
+                std::string(solid ? "a solid-state one" : "no solid-state one") + ")");
+  res.spinning = spinning->name;
+  res.solid = solid->name;
+
+  // ---- read the start of the bag: IMU, the stationary LiDAR data, sweeps for the clock offset ----
+  io::BagSource source(bag_path, io::bagSourceOptions(cfg_in, "hvi"));
+  Collected c;
+  c.start_ns = source.beginNs();
+  const double rest_s = 0.1 * std::max(opt.solid_frames, opt.spinning_sweeps) + 0.05;
+  const Stamp temporal_end = c.start_ns + fromSec(opt.estimate_time_offset ? opt.temporal_window_s : rest_s + 0.5);
+  Stamp first_lidar = 0;
+  std::deque<LidarScan> pending;
+  const double turn_rate = 0.5 * opt.temporal.min_rate_rad_s;
+  io::SensorEvent ev;
+  while (source.next(&ev)) {
+    if (ev.kind == io::SensorEvent::Kind::kImu) {
+      if (ev.imu.stamp_ns > temporal_end) break;
+      c.imu.push_back(ev.imu);
+      continue;
+    }
+    LidarScan& scan = ev.scan;
+    if (!first_lidar) first_lidar = scan.start_ns;
+    const bool in_rest = scan.start_ns < first_lidar + fromSec(rest_s);
+    if (scan.sensor == solid->name && in_rest && static_cast<int>(c.solid_frames.size()) < opt.solid_frames) {
+      c.solid_frames.push_back(scan);
+    } else if (scan.sensor == spinning->name) {
+      if (in_rest && static_cast<int>(c.spinning_rest.size()) < opt.spinning_sweeps) c.spinning_rest.push_back(scan);
+      if (opt.estimate_time_offset) pending.push_back(std::move(scan));
+    }
+    // Sweeps wait until the IMU covers them (+ the offset search range); only those near a turn
+    // are kept for the clock offset: a full sweep is ~0.7 MB.
+    const Stamp imu_now = c.imu.empty() ? 0 : c.imu.back().stamp_ns;
+    while (!pending.empty() && pending.front().start_ns + fromSec(0.1 + kTurnMarginS) < imu_now) {
+      if (turningNear(c.imu, pending.front().start_ns, kTurnMarginS, turn_rate)) c.spinning_all.push_back(std::move(pending.front()));
+      pending.pop_front();
+    }
+  }
+  for (LidarScan& scan : pending)
+    if (turningNear(c.imu, scan.start_ns, kTurnMarginS, turn_rate)) c.spinning_all.push_back(std::move(scan));
+  if (c.solid_frames.empty()) throw Error("no '" + solid->name + "' frames at the start of " + bag_path);
+  if (c.spinning_rest.empty()) throw Error("no '" + spinning->name + "' sweeps at the start of " + bag_path);
+
+  // ---- stationary? (the spatial step assumes both LiDARs see the same, still scene) ----
+  const Stamp rest_begin = first_lidar, rest_end = first_lidar + fromSec(rest_s);
+  Eigen::Vector3d gyro_mean = Eigen::Vector3d::Zero(), acc_mean = Eigen::Vector3d::Zero();
+  int n = 0;
+  for (const ImuSample& s : c.imu)
+    if (s.stamp_ns >= rest_begin && s.stamp_ns <= rest_end) {
+      gyro_mean += s.gyro_rad_s;
+      acc_mean += s.acc_m_s2;
+      ++n;
+    }
+  if (n < 10) throw Error("fewer than 10 IMU samples during the first " + fmt(rest_s) + " s of LiDAR data in " + bag_path);
+  gyro_mean /= n;
+  acc_mean /= n;
+  // Deviation of 50 ms block means from the window mean: single samples carry the sensor noise
+  // (0.3 m/s^2, 0.03 rad/s per sample for a typical MEMS IMU at 200 Hz), blocks show motion.
+  double gyro_dev = 0, acc_dev = 0;
+  for (Stamp b = rest_begin; b + fromSec(0.05) <= rest_end; b += fromSec(0.05)) {
+    Eigen::Vector3d g = Eigen::Vector3d::Zero(), a = Eigen::Vector3d::Zero();
+    int m = 0;
+    for (const ImuSample& s : c.imu)
+      if (s.stamp_ns >= b && s.stamp_ns < b + fromSec(0.05)) {
+        g += s.gyro_rad_s;
+        a += s.acc_m_s2;
+        ++m;
+      }
+    if (m == 0) continue;
+    gyro_dev = std::max(gyro_dev, (g / m - gyro_mean).norm());
+    acc_dev = std::max(acc_dev, (a / m - acc_mean).norm());
+  }
+  if (gyro_dev > opt.max_rest_gyro_rad_s || acc_dev > opt.max_rest_acc_m_s2)
+    throw Error("the rig moves during the first " + fmt(rest_s) + " s (gyro deviates by up to " + fmt(gyro_dev) +
+                " rad/s, accelerometer by " + fmt(acc_dev) + " m/s^2): calibration needs it standing still at "
+                "the start; cut the bag to begin at rest (rosbag filter) or record a still second first");
+
+  // ---- spatial ----
+  std::vector<Eigen::Vector3d> solid_pts, spinning_pts;
+  for (const LidarScan& s : c.solid_frames)
+    for (const Point& p : s.points) solid_pts.push_back(p.xyz.cast<double>());
+  for (const LidarScan& s : c.spinning_rest)
+    for (const Point& p : s.points) spinning_pts.push_back(p.xyz.cast<double>());
+  const Eigen::Isometry3d guess = solid->T_imu_sensor.inverse() * spinning->T_imu_sensor;
+  res.spatial = calib::calibrateSpinningToSolid(spinning_pts, solid_pts, guess, opt.spatial);
+  if (!res.spatial.ok) throw Error("spatial calibration refused: " + res.spatial.message);
+  const Eigen::Isometry3d T_imu_spinning = solid->T_imu_sensor * res.spatial.T_solid_spinning;
+  log::emit(log::Level::kInfo, "spatial calibration: ", res.spatial.message);
+
+  // ---- temporal ----
+  double offset_s = spinning->time_offset_s;
+  if (opt.estimate_time_offset) {
+    res.temporal = calib::calibrateTimeOffset(c.spinning_all, T_imu_spinning, c.imu, gyro_mean, opt.temporal);
+    if (res.temporal.ok) {
+      offset_s = res.temporal.offset_s;
+      log::emit(log::Level::kInfo, "clock offset of '", spinning->name, "': ", fmt(1e3 * offset_s, 4), " +- ",
+                fmt(1e3 * res.temporal.sigma_s, 2), " ms (", res.temporal.message, ")");
+    } else {
+      log::emit(log::Level::kWarn, "clock offset not estimated (", res.temporal.message, "); keeping ",
+                spinning->time_offset_s, " s from the config");
+    }
+  }
+
+  io::SensorCalibration sc_spin{T_imu_spinning, offset_s}, sc_solid{solid->T_imu_sensor, solid->time_offset_s};
+  res.calibration[spinning->name] = sc_spin;
+  res.calibration[solid->name] = sc_solid;
+
+  res.extra[spinning->name]["fitness_m"] = res.spatial.fitness_m;
+  res.extra[spinning->name]["overlap"] = res.spatial.overlap;
+  res.extra[spinning->name]["points_used"] = res.spatial.spinning_points;
+  res.extra[spinning->name]["reference_points_used"] = res.spatial.solid_points;
+  res.extra[spinning->name]["yaw_searched"] = res.spatial.yaw_searched;
+  res.extra[spinning->name]["time_offset_estimated"] = res.temporal.ok;
+  if (res.temporal.ok) {
+    res.extra[spinning->name]["time_offset_sigma_s"] = res.temporal.sigma_s;
+    res.extra[spinning->name]["time_offset_increments"] = res.temporal.increments;
+  }
+  res.extra["generated_by"] = "mmlio calibrate " + bag_path;
+
+  Json j = Json::object();
+  j["reference"] = solid->name;
+  j["calibrated"] = spinning->name;
+  j["T_imu_sensor"] = matrixRows(T_imu_spinning);
+  j["fitness_m"] = res.spatial.fitness_m;
+  j["overlap"] = res.spatial.overlap;
+  j["points_used"] = res.spatial.spinning_points;
+  j["reference_points_used"] = res.spatial.solid_points;
+  j["spatial"] = res.spatial.message;
+  j["time_offset_s"] = offset_s;
+  j["time_offset_estimated"] = res.temporal.ok;
+  j["time_offset_sigma_s"] = res.temporal.sigma_s;
+  j["temporal"] = res.temporal.message;
+  res.report = j;
+  return res;
+}
+
+}  // namespace mmlio::pipeline
