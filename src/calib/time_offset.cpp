@@ -1,6 +1,7 @@
 #include "mmlio/calib/time_offset.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <limits>
 
@@ -114,9 +115,11 @@ TimeOffsetResult estimateTimeOffset(const std::vector<SensorRotation>& rotations
   }
   res.increments = static_cast<int>(moving.size());
   if (res.increments < cfg.min_increments) {
-    res.message = "only " + std::to_string(moving.size()) + " sweep pairs turn faster than " +
-                  std::to_string(cfg.min_rate_rad_s) + " rad/s (need " + std::to_string(cfg.min_increments) +
-                  "): record a few turns after the stationary start to calibrate the clock offset";
+    char rate[32];
+    std::snprintf(rate, sizeof(rate), "%.2g", cfg.min_rate_rad_s);
+    res.message = "only " + std::to_string(moving.size()) + " sweep pairs turn faster than " + rate + " rad/s (need " +
+                  std::to_string(cfg.min_increments) + "): record a few turns after the stationary start to calibrate "
+                  "the clock offset";
     return res;
   }
   const auto cost = [&](double offset_s) {
@@ -134,7 +137,9 @@ TimeOffsetResult estimateTimeOffset(const std::vector<SensorRotation>& rotations
     if (costs[i + n] < costs[best]) best = i + n;
   }
   if (best == 0 || best == 2 * n) {
-    res.message = "the best clock offset lies at the edge of the +-" + std::to_string(cfg.max_offset_s) +
+    char range[32];
+    std::snprintf(range, sizeof(range), "%.2g", cfg.max_offset_s);
+    res.message = std::string("the best clock offset lies at the edge of the +-") + range +
                   " s search range: the offset is larger, or the LiDAR's rotations do not match the gyroscope";
     return res;
   }

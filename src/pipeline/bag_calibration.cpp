@@ -7,6 +7,7 @@
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
 #include "mmlio/io/bag_source.hpp"
+#include "mmlio/lidar/voxel_filter.hpp"
 
 namespace mmlio::pipeline {
 namespace {
@@ -68,7 +69,7 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const io::RigConf
   const Stamp temporal_end = c.start_ns + fromSec(opt.estimate_time_offset ? opt.temporal_window_s : rest_s + 0.5);
   Stamp first_lidar = 0;
   std::deque<LidarScan> pending;
-  const double turn_rate = 0.5 * opt.temporal.min_rate_rad_s;
+  const double turn_rate = opt.temporal.min_rate_rad_s;
   io::SensorEvent ev;
   while (source.next(&ev)) {
     if (ev.kind == io::SensorEvent::Kind::kImu) {
@@ -83,7 +84,11 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const io::RigConf
       c.solid_frames.push_back(scan);
     } else if (scan.sensor == spinning->name) {
       if (in_rest && static_cast<int>(c.spinning_rest.size()) < opt.spinning_sweeps) c.spinning_rest.push_back(scan);
-      if (opt.estimate_time_offset) pending.push_back(std::move(scan));
+      if (opt.estimate_time_offset) {
+        // The scan-to-scan ICP works on 0.1 m voxels: thinner sweeps lose nothing and keep memory low.
+        scan.points = lidar::voxelDownsample(scan.points, opt.temporal_voxel_m);
+        pending.push_back(std::move(scan));
+      }
     }
     // Sweeps wait until the IMU covers them (+ the offset search range); only those near a turn
     // are kept for the clock offset: a full sweep is ~0.7 MB.

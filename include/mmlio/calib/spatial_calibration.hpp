@@ -27,7 +27,7 @@ struct SpatialCalibrationConfig {
   double max_fitness_m = 0.05;             // accept: mean inlier distance at most this ...
   double min_overlap = 0.5;                // ... and this fraction of cropped spinning points matched
   int min_points = 500;                    // fewer points on either side: refuse
-  double min_translation_conditioning = 0.1;  // weakest / strongest translation eigenvalue of the GICP
+  double min_translation_conditioning = 0.05;  // weakest / strongest translation eigenvalue of the GICP
                                               // Hessian below this: degenerate overlap (a wall), refuse
   GicpConfig gicp = [] {
     GicpConfig g;
