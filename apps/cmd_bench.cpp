@@ -18,6 +18,7 @@ namespace {
 struct BenchArgs {
   std::string bag, config, mode, calib;
   int repeat = 1;
+  int replays = 1;
 };
 
 double peakRssMb() {
@@ -33,6 +34,7 @@ void bench(const BenchArgs& a) {
   if (!a.calib.empty()) io::applyCalibration(options.config, io::readCalibration(a.calib));
   options.mode = a.mode;
   options.progress = false;
+  options.replays = a.replays;
   for (int pass = 1; pass <= a.repeat; ++pass) {
     Stopwatch wall;
     const pipeline::RunResult r = pipeline::runBag(options);
@@ -56,6 +58,9 @@ void registerBenchCommand(CLI::App& app) {
   cmd->add_option("-m,--mode", args->mode, "hvi | vi | hi")->check(CLI::IsMember({"hvi", "vi", "hi"}));
   cmd->add_option("--calib", args->calib, "Calibration YAML overriding the config's extrinsics (as `mmlio run --calib`)")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--replay", args->replays,
+                  "Play the bag this many times back to back as ONE sequence (long-run memory)")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--repeat", args->repeat, "Passes over the bag (memory must stay flat)")->check(CLI::PositiveNumber);
   cmd->callback([args] { bench(*args); });
 }

@@ -79,6 +79,7 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
       node.cloud_body = backend::voxelCentroids(pts, cfg_.loop_cloud_voxel_m);
     }
     const int k = graph_.addKeyframe(std::move(node));
+    closeSubmap();
     submaps_.emplace_back();
     T_world_keyframe_ = T_world_body;
 
@@ -98,7 +99,7 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
     strided_.clear();
     for (std::size_t i = begin + phase; i < end; i += stride) strided_.push_back(sweep.points_body[i]);
     const std::string key = split ? sweep.lidars[l].sensor : std::string();
-    submaps_.back().try_emplace(key, cfg_.map_leaf_m).first->second.add(strided_, T_keyframe_body);
+    open_.try_emplace(key, cfg_.map_leaf_m).first->second.add(strided_, T_keyframe_body);
     begin = end;
   }
 }
@@ -111,11 +112,25 @@ Trajectory MappingBackend::correctedTrajectory() const {
   return out;
 }
 
+void MappingBackend::closeSubmap() {
+  if (submaps_.empty()) return;
+  for (auto& [lidar, acc] : open_) {
+    std::vector<Point> pts = acc.points();
+    pts.shrink_to_fit();
+    submaps_.back()[lidar] = std::move(pts);
+  }
+  open_.clear();
+}
+
 std::vector<Point> MappingBackend::mergedMap(const std::string* only_lidar) const {
   MapAccumulator merged(cfg_.map_leaf_m);
+  const auto addAt = [&](const std::vector<Point>& pts, std::size_t k) { merged.add(pts, graph_.pose(static_cast<int>(k))); };
   for (std::size_t k = 0; k < submaps_.size(); ++k)
-    for (const auto& [lidar, acc] : submaps_[k])
-      if (!only_lidar || lidar == *only_lidar) merged.add(acc.points(), graph_.pose(static_cast<int>(k)));
+    for (const auto& [lidar, pts] : submaps_[k])
+      if (!only_lidar || lidar == *only_lidar) addAt(pts, k);
+  if (!submaps_.empty())  // the newest keyframe's submap is still open
+    for (const auto& [lidar, acc] : open_)
+      if (!only_lidar || lidar == *only_lidar) addAt(acc.points(), submaps_.size() - 1);
   return merged.points();
 }
 
@@ -125,9 +140,12 @@ std::vector<Point> MappingBackend::lidarMap(const std::string& lidar) const { re
 
 std::vector<std::string> MappingBackend::lidarNames() const {
   std::vector<std::string> names;
+  const auto note = [&](const std::string& lidar) {
+    if (!lidar.empty() && std::find(names.begin(), names.end(), lidar) == names.end()) names.push_back(lidar);
+  };
   for (const Submap& submap : submaps_)
-    for (const auto& [lidar, acc] : submap)
-      if (!lidar.empty() && std::find(names.begin(), names.end(), lidar) == names.end()) names.push_back(lidar);
+    for (const auto& [lidar, pts] : submap) note(lidar);
+  for (const auto& [lidar, acc] : open_) note(lidar);
   return names;
 }
 

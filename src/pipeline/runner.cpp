@@ -4,6 +4,7 @@
 #include <limits>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <sstream>
 
 #include "mmlio/core/error.hpp"
@@ -78,20 +79,30 @@ RunResult runBag(const RunOptions& options) {
   try {
     io::SensorEvent event;
     std::size_t events = 0;
-    while (source.next(&event)) {
-      if (event.kind == io::SensorEvent::Kind::kImu) {
-        if (event.imu.stamp_ns > stop_ns) break;
-        online.addImu(event.imu);
-      } else {
-        online.addScan(std::move(event.scan));
-      }
-      if (++events % 50 == 0) {
-        std::ostringstream status;
-        const double bag_s = toSec(odometry.lastImuNs() - source.beginNs());
-        status.precision(3);
-        status << online.sweepsProcessed() << " sweeps, " << odometry.keyframes() << " kf, "
-               << bag_s / std::max(1e-3, wall.elapsedMs() * 1e-3) << "x rt";
-        progress.update(source.progress(), status.str());
+    const Stamp period_ns = source.endNs() - source.beginNs() + fromSec(1.0);
+    for (int replay = 0; replay < std::max(1, options.replays); ++replay) {
+      // Replays re-open the bag and shift its stamps past the previous pass.
+      std::unique_ptr<io::BagSource> again;
+      if (replay > 0) again = std::make_unique<io::BagSource>(options.bag_path, io::bagSourceOptions(cfg, mode));
+      io::BagSource& src = replay > 0 ? *again : source;
+      const Stamp shift = replay * period_ns;
+      while (src.next(&event)) {
+        if (event.kind == io::SensorEvent::Kind::kImu) {
+          event.imu.stamp_ns += shift;
+          if (event.imu.stamp_ns > stop_ns) break;
+          online.addImu(event.imu);
+        } else {
+          event.scan.start_ns += shift;
+          online.addScan(std::move(event.scan));
+        }
+        if (++events % 50 == 0) {
+          std::ostringstream status;
+          const double bag_s = toSec(odometry.lastImuNs() - source.beginNs());
+          status.precision(3);
+          status << online.sweepsProcessed() << " sweeps, " << odometry.keyframes() << " kf, "
+                 << bag_s / std::max(1e-3, wall.elapsedMs() * 1e-3) << "x rt";
+          progress.update((replay + src.progress()) / std::max(1, options.replays), status.str());
+        }
       }
     }
     online.flush();

@@ -57,9 +57,13 @@ class MappingBackend {
   Config cfg_;
   backend::PoseGraph graph_;
   std::unique_ptr<backend::LoopCloser> closer_;
-  // One submap per keyframe (in its frame), one accumulator per LiDAR in it ("" = all LiDARs).
-  using Submap = std::map<std::string, MapAccumulator>;
+  // One submap per keyframe (in its frame), per LiDAR ("" = all LiDARs): voxel accumulators while
+  // the keyframe is the newest, then frozen into plain point lists (about 3x smaller than the hash
+  // maps; a closed submap only moves with its keyframe).
+  using Submap = std::map<std::string, std::vector<Point>>;
   std::vector<Submap> submaps_;
+  std::map<std::string, MapAccumulator> open_;
+  void closeSubmap();
   std::vector<Point> mergedMap(const std::string* only_lidar) const;
   Trajectory odometry_;
   Eigen::Isometry3d T_world_keyframe_ = Eigen::Isometry3d::Identity();

@@ -23,6 +23,8 @@ struct RunOptions {
   bool progress = true;           // progress bar on stderr
   std::string gt_path;            // optional TUM ground truth: evaluation in the report
   double max_duration_s = 0.0;    // > 0: stop after this much bag time
+  int replays = 1;                // > 1: the bag is played this many times back to back, shifted in
+                                  // time, as ONE sequence (long-run memory and drift checks)
 };
 
 struct RunResult {
