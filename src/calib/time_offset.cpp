@@ -53,6 +53,10 @@ LidarScan gyroDeskewed(const LidarScan& scan, const GyroDeskew& d) {
     T.linear() = so3::exp(gyroRotation(*d.imu, scan.start_ns + fromSec(t) + shift, end + shift, d.gyro_bias))
                      .toRotationMatrix()
                      .transpose();
+    if (d.velocity) {
+      const auto it = d.velocity->find(scan.start_ns);
+      if (it != d.velocity->end()) T.translation() = -(d.T_imu_sensor.linear() * it->second) * (end_s - t);
+    }
     times.push_back(t);
     T_end_t.push_back(T);
   }
@@ -87,7 +91,8 @@ std::vector<SensorRotation> sweepRotations(const std::vector<LidarScan>& sweeps,
       const backend::IcpResult r = backend::alignPointToPlane(toVec(next), target, prior, icp);
       if (r.converged) {
         prior = r.T_target_source;  // the next pair moves about the same
-        out.push_back({stamp(current), stamp(next), so3::log(Eigen::Quaterniond(r.T_target_source.rotation()).normalized())});
+        out.push_back({stamp(current), stamp(next), so3::log(Eigen::Quaterniond(r.T_target_source.rotation()).normalized()),
+                       r.T_target_source.translation()});
       } else {
         prior = Eigen::Isometry3d::Identity();
       }
@@ -164,8 +169,22 @@ TimeOffsetResult calibrateTimeOffset(const std::vector<LidarScan>& sweeps, const
                                      const std::vector<ImuSample>& imu, const Eigen::Vector3d& gyro_bias,
                                      const TimeOffsetConfig& cfg, int max_rounds) {
   const Eigen::Matrix3d R = T_imu_sensor.linear();
-  TimeOffsetResult res = estimateTimeOffset(sweepRotations(sweeps), R, imu, gyro_bias, cfg);
+  const std::vector<SensorRotation> raw = sweepRotations(sweeps);
+  TimeOffsetResult res = estimateTimeOffset(raw, R, imu, gyro_bias, cfg);
   if (!res.ok) return res;
+  // Each sweep's velocity from the raw registration of the pair it starts (mid stamps are
+  // within the sweep, so match a pair to the sweep whose start precedes its t0 most closely).
+  std::map<Stamp, Eigen::Vector3d> velocity;
+  for (const SensorRotation& r : raw) {
+    const double dt = toSec(r.t1_ns - r.t0_ns);
+    if (dt <= 0) continue;
+    const auto after = std::upper_bound(sweeps.begin(), sweeps.end(), r.t0_ns,
+                                        [](Stamp t, const LidarScan& s) { return t < s.start_ns; });
+    if (after == sweeps.begin()) continue;
+    const Eigen::Vector3d v = r.translation / dt;
+    velocity[(after - 1)->start_ns] = v;
+    if (after != sweeps.end()) velocity.emplace(after->start_ns, v);  // the pair's second sweep, if unset
+  }
   // Only the turning sweeps (and their successors) carry timing information: re-register those.
   std::vector<LidarScan> turning;
   for (std::size_t k = 0; k + 1 < sweeps.size(); ++k) {
@@ -179,7 +198,7 @@ TimeOffsetResult calibrateTimeOffset(const std::vector<LidarScan>& sweeps, const
     }
   }
   for (int round = 1; round < max_rounds; ++round) {
-    GyroDeskew d{&imu, gyro_bias, T_imu_sensor, res.offset_s};
+    GyroDeskew d{&imu, gyro_bias, T_imu_sensor, res.offset_s, &velocity};
     const TimeOffsetResult next = estimateTimeOffset(sweepRotations(turning, backend::IcpConfig(), &d), R, imu, gyro_bias, cfg);
     if (!next.ok) break;
     const double moved = std::abs(next.offset_s - res.offset_s);

@@ -5,6 +5,7 @@
 // estimate (t_imu = t_lidar_stamp + offset). Grid search, parabolic refinement, and a standard
 // deviation from the cost's curvature and the residual spread. Needs rotation: turns in the
 // first seconds of motion are what make it observable.
+#include <map>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,7 @@ namespace mmlio::calib {
 struct SensorRotation {
   Stamp t0_ns = 0, t1_ns = 0;
   Eigen::Vector3d rotvec = Eigen::Vector3d::Zero();
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();  // of the sensor, in its frame at t0
 };
 
 /// Gyro-based de-skew of the sweeps before their scan-to-scan registration, at a trial offset.
@@ -25,6 +27,9 @@ struct GyroDeskew {
   Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();
   Eigen::Isometry3d T_imu_sensor = Eigen::Isometry3d::Identity();
   double offset_s = 0.0;  // t_imu = t_stamp + offset_s
+  // Sensor-frame velocity per sweep start stamp (from a previous registration pass); sweeps not
+  // listed are de-skewed in rotation only. Walking at 1 m/s moves a sweep by 10 cm.
+  const std::map<Stamp, Eigen::Vector3d>* velocity = nullptr;
 };
 
 /// Scan-to-scan rotations of consecutive sweeps (sensor frame). Raw sweeps are stamped at their
