@@ -51,8 +51,11 @@ ceres::Solver::Options odometrySolverOptions(int max_iterations) {
 
 void addMapResiduals(ceres::Problem& problem, double* pose, const std::vector<MapMatch>& matches, double sigma_m,
                      double huber_m) {
+  if (matches.empty()) return;
   const double w = 1.0 / sigma_m;
-  for (const MapMatch& m : matches) problem.AddResidualBlock(mapMatchCost(m, w), new ceres::HuberLoss(huber_m * w), pose);
+  // One loss shared by all of this pose's residuals: the problem deletes each distinct loss once.
+  ceres::LossFunction* loss = new ceres::HuberLoss(huber_m * w);
+  for (const MapMatch& m : matches) problem.AddResidualBlock(mapMatchCost(m, w), loss, pose);
 }
 
 SlidingWindow::SlidingWindow(SlidingWindowConfig cfg, const Eigen::Vector3d& g_world)
@@ -113,8 +116,13 @@ void SlidingWindow::marginalizeOldest(const map::VoxelHashMap& edge_map, const m
   info->addResidualBlock({new ImuFactor(next.pre, g_world_), nullptr,
                           {old.x.pose, old.x.speed_bias, next.x.pose, next.x.speed_bias}, {0, 1}});
   const double w = 1.0 / cfg_.lidar_sigma_m;
-  for (const MapMatch& m : findMapMatches(old.features, poseOf(old.x.pose), edge_map, plane_map, cfg_.matching))
-    info->addResidualBlock({mapMatchCost(m, w), new ceres::HuberLoss(cfg_.huber_loss_m * w), {old.x.pose}, {0}});
+  ceres::LossFunction* loss = new ceres::HuberLoss(cfg_.huber_loss_m * w);  // shared, deleted once
+  bool loss_used = false;
+  for (const MapMatch& m : findMapMatches(old.features, poseOf(old.x.pose), edge_map, plane_map, cfg_.matching)) {
+    info->addResidualBlock({mapMatchCost(m, w), loss, {old.x.pose}, {0}});
+    loss_used = true;
+  }
+  if (!loss_used) delete loss;
   info->preMarginalize();
   info->marginalize();
   std::unordered_map<long, double*> same_address;
