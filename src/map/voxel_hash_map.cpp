@@ -17,11 +17,25 @@ VoxelHashMap::Key VoxelHashMap::keyOf(const Eigen::Vector3d& p) const {
              static_cast<int>(std::floor(p.z() * inv_voxel_))};
 }
 
+void VoxelHashMap::markOccupied(const Key& k) {
+  const std::size_t bit = KeyHash()(k) & (kOccupancyBits - 1);
+  occupancy_[bit >> 6] |= std::uint64_t{1} << (bit & 63);
+}
+
+bool VoxelHashMap::maybeOccupied(const Key& k) const {
+  const std::size_t bit = KeyHash()(k) & (kOccupancyBits - 1);
+  return (occupancy_[bit >> 6] >> (bit & 63)) & 1u;
+}
+
 void VoxelHashMap::add(const std::vector<Eigen::Vector3d>& world_points) {
   for (const auto& p : world_points) {
     if (!p.allFinite()) continue;
-    auto& bucket = voxels_[keyOf(p)];
-    if (bucket.empty()) bucket.reserve(static_cast<std::size_t>(max_points_per_voxel_));
+    const Key key = keyOf(p);
+    auto& bucket = voxels_[key];
+    if (bucket.empty()) {
+      bucket.reserve(static_cast<std::size_t>(max_points_per_voxel_));
+      markOccupied(key);
+    }
     if (static_cast<int>(bucket.size()) >= max_points_per_voxel_) continue;
     bucket.push_back(p);
     ++num_points_;
@@ -38,6 +52,8 @@ void VoxelHashMap::removeFarFrom(const Eigen::Vector3d& center, double radius_m)
       ++it;
     }
   }
+  std::fill(occupancy_.begin(), occupancy_.end(), 0);
+  for (const auto& [key, bucket] : voxels_) markOccupied(key);
 }
 
 int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
@@ -51,6 +67,7 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
   best.reserve(static_cast<std::size_t>(k) + 1);
   const auto cmp = [](const auto& a, const auto& b) { return a.first < b.first; };
   const auto visit = [&](const Key& key) {
+    if (!maybeOccupied(key)) return;
     const auto it = voxels_.find(key);
     if (it == voxels_.end()) return;
     for (const auto& p : it->second) {
@@ -110,6 +127,7 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
 
 void VoxelHashMap::clear() {
   voxels_.clear();
+  std::fill(occupancy_.begin(), occupancy_.end(), 0);
   num_points_ = 0;
 }
 

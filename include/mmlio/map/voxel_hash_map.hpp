@@ -57,6 +57,13 @@ class VoxelHashMap {
   int max_points_per_voxel_;
   std::size_t num_points_ = 0;
   std::unordered_map<Key, std::vector<Eigen::Vector3d>, KeyHash> voxels_;
+  // One bit per hash slot, set when a voxel with that hash exists (rebuilt on removal): a clear
+  // bit proves a voxel empty without the hash-table lookup, which is most of a kNN query's cost
+  // where the map is sparse (far features in a large hall scan up to 125 voxels, mostly empty).
+  static constexpr std::size_t kOccupancyBits = std::size_t{1} << 20;
+  std::vector<std::uint64_t> occupancy_ = std::vector<std::uint64_t>(kOccupancyBits / 64, 0);
+  void markOccupied(const Key& k);
+  bool maybeOccupied(const Key& k) const;
 };
 
 }  // namespace mmlio::map
