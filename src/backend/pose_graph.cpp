@@ -202,6 +202,12 @@ bool PoseGraph::optimize() {
   return true;
 }
 
+void PoseGraph::dropCloud(int i) {
+  auto& cloud = nodes_.at(static_cast<std::size_t>(i)).cloud_body;
+  cloud.clear();
+  cloud.shrink_to_fit();
+}
+
 Eigen::Isometry3d PoseGraph::pose(int i) const { return fromParams(params_.at(static_cast<std::size_t>(i))); }
 
 Eigen::Isometry3d PoseGraph::correct(Stamp t, const Eigen::Isometry3d& T_world_body_odom) const {

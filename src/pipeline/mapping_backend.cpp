@@ -1,6 +1,7 @@
 #include "mmlio/pipeline/mapping_backend.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "mmlio/backend/point_to_plane_icp.hpp"
 #include "mmlio/core/log.hpp"
@@ -114,12 +115,38 @@ Trajectory MappingBackend::correctedTrajectory() const {
 
 void MappingBackend::closeSubmap() {
   if (submaps_.empty()) return;
+  const Eigen::Isometry3d T_world_keyframe = graph_.pose(static_cast<int>(submaps_.size()) - 1);
+  const double leaf = cfg_.map_leaf_m;
+  std::size_t seen = 0, new_voxels = 0;
   for (auto& [lidar, acc] : open_) {
     std::vector<Point> pts = acc.points();
+    seen += pts.size();
+    if (cfg_.dedupe_revisits && leaf > 0.0) {
+      // Revisits add nothing new: drop voxels an earlier keyframe already holds. Loops corrected
+      // later move each point with the keyframe that kept it, so the map stays consistent.
+      auto& covered = covered_[lidar];
+      const auto key = [leaf](const Eigen::Vector3d& w) {
+        const auto axis = [leaf](double v) {
+          return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(v / leaf)) + (1 << 20)) & 0x1FFFFFu;
+        };
+        return (axis(w.x()) << 42) | (axis(w.y()) << 21) | axis(w.z());
+      };
+      std::size_t kept = 0;
+      for (const Point& p : pts)
+        if (covered.insert(key(T_world_keyframe * p.xyz.cast<double>())).second) pts[kept++] = p;
+      pts.resize(kept);
+    }
+    new_voxels += pts.size();
     pts.shrink_to_fit();
     submaps_.back()[lidar] = std::move(pts);
   }
   open_.clear();
+  // A keyframe that added almost nothing new to the map revisits a place older keyframes cover:
+  // its loop cloud would only duplicate theirs as a candidate, so it is freed (the last keyframe,
+  // still open, keeps its cloud for the end-of-run loop check).
+  const int k = static_cast<int>(submaps_.size()) - 1;
+  if (cfg_.dedupe_revisits && leaf > 0.0 && k > 0 && seen > 0 && new_voxels < cfg_.revisit_new_fraction * seen)
+    graph_.dropCloud(k);
 }
 
 std::vector<Point> MappingBackend::mergedMap(const std::string* only_lidar) const {

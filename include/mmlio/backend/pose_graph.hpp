@@ -66,6 +66,8 @@ class PoseGraph {
   /// Current estimate of T_world_body of keyframe i (its odometry pose until optimised).
   Eigen::Isometry3d pose(int i) const;
   std::size_t loops() const { return loops_.size(); }
+  /// Frees keyframe i's cloud (it then stops being a loop candidate; its pose stays in the graph).
+  void dropCloud(int i);
 
   /// T_world_body of an odometry pose stamped t, corrected like the last keyframe at or before t:
   /// pose(k) * T_world_body_odom(k)^-1 * T_world_body_odom. Identity correction before keyframe 0.

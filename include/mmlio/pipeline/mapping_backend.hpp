@@ -6,6 +6,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include "mmlio/backend/loop_closer.hpp"
@@ -29,6 +30,11 @@ class MappingBackend {
     int map_point_stride = 4;            // each sweep adds every n-th point (offset rotates per sweep):
                                          // overlapping sweeps still fill every voxel, at 1/n the cost
     bool per_lidar_maps = false;         // keep each LiDAR's points apart too (lidarMap)
+    bool dedupe_revisits = true;         // a closed submap keeps only voxels no earlier keyframe
+                                         // holds (at the estimate then): memory follows the mapped
+                                         // surface, not the time spent in it
+    double revisit_new_fraction = 0.1;   // a closed keyframe with fewer new voxels than this
+                                         // fraction frees its loop cloud (a revisit)
   };
 
   explicit MappingBackend(Config cfg);
@@ -63,6 +69,7 @@ class MappingBackend {
   using Submap = std::map<std::string, std::vector<Point>>;
   std::vector<Submap> submaps_;
   std::map<std::string, MapAccumulator> open_;
+  std::map<std::string, std::unordered_set<std::uint64_t>> covered_;  // world voxels held, per LiDAR key
   void closeSubmap();
   std::vector<Point> mergedMap(const std::string* only_lidar) const;
   Trajectory odometry_;
