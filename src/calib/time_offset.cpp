@@ -199,7 +199,12 @@ TimeOffsetResult calibrateTimeOffset(const std::vector<LidarScan>& sweeps, const
   }
   for (int round = 1; round < max_rounds; ++round) {
     GyroDeskew d{&imu, gyro_bias, T_imu_sensor, res.offset_s, &velocity};
-    const TimeOffsetResult next = estimateTimeOffset(sweepRotations(turning, backend::IcpConfig(), &d), R, imu, gyro_bias, cfg);
+    // Finer than the first pass (whose job is only a start): measured on the simulated corridor
+    // 73.8 -> 70.9 ms for a true 70 ms, office 70.7 -> 71.4 ms.
+    backend::IcpConfig fine;
+    fine.voxel_fine_m = 0.05;
+    fine.max_corr_fine_m = 0.15;
+    const TimeOffsetResult next = estimateTimeOffset(sweepRotations(turning, fine, &d), R, imu, gyro_bias, cfg);
     if (!next.ok) break;
     const double moved = std::abs(next.offset_s - res.offset_s);
     res = next;
