@@ -27,6 +27,10 @@ struct SimulateArgs {
   double duration_s = 0.0;
   std::uint64_t seed = 1;
   double time_offset_s = 0.0;
+  std::string pattern = "lissajous";
+  sim::ImuNoiseConfig imu;
+  double acc_bias_m_s2 = -1;
+  bool random_mount = false;
 };
 
 YAML::Node vec3(const Eigen::Vector3d& v) {
@@ -59,6 +63,9 @@ void writeTruth(const std::string& path, const sim::Simulator& sim, const Simula
   imu["initial_gyro_bias_rad_s"] = vec3(sim.initialBias().gyro_rad_s);
   extra["imu"] = imu;
   extra["scenario"] = args.scenario;
+  extra["livox_pattern"] = args.pattern;
+  extra["random_mount"] = args.random_mount;
+  extra["velodyne_phase_s"] = toSec(sim.velodyneTrueStartNs(0) - sim.startNs());
   extra["seed"] = args.seed;
   extra["duration_s"] = sim.durationS();
   extra["path_length_m"] = sim.pathLengthM();
@@ -74,6 +81,11 @@ void runSimulate(const SimulateArgs& args) {
   options.duration_s = args.duration_s;
   options.seed = args.seed;
   options.velodyne_time_offset_s = args.time_offset_s;
+  options.imu = args.imu;
+  options.acc_bias_m_s2 = args.acc_bias_m_s2;
+  options.random_mount = args.random_mount;
+  options.livox_pattern = args.pattern == "rosette" ? sim::SolidStatePattern::kRosette : sim::SolidStatePattern::kLissajous;
+  options.livox_no_returns_as_zero = true;  // what livox_ros_driver publishes
   const sim::Simulator sim(options);  // throws for an unknown scenario
 
   std::error_code error;
@@ -144,6 +156,22 @@ void registerSimulateCommand(CLI::App& app) {
   cmd->add_option("--seed", args->seed, "Noise seed (same seed, same bytes)");
   cmd->add_option("--time-offset", args->time_offset_s,
                   "Velodyne stamps are written as t_true - S (truth time_offset_s = S)");
+  cmd->add_option("--pattern", args->pattern,
+                  "Solid-state scan pattern: lissajous (Horizon-like lines) or rosette (Mid-40 / Avia-like petals)")
+      ->check(CLI::IsMember({"lissajous", "rosette"}));
+  cmd->add_option("--acc-noise", args->imu.acc_noise_density, "Accelerometer white noise, m/s^2/sqrt(Hz)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--gyro-noise", args->imu.gyro_noise_density, "Gyroscope white noise, rad/s/sqrt(Hz)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--acc-walk", args->imu.acc_random_walk, "Accelerometer bias random walk, m/s^3/sqrt(Hz)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--gyro-walk", args->imu.gyro_random_walk, "Gyroscope bias random walk, rad/s^2/sqrt(Hz)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--acc-bias", args->acc_bias_m_s2,
+                  "Initial accelerometer bias per axis, m/s^2 (signs drawn from the seed; default: a fixed 0.02 bias)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_flag("--random-mount", args->random_mount,
+                "Draw both LiDAR extrinsics and the Velodyne sweep phase from the seed (written to NAME_truth.yaml)");
   cmd->callback([args] { runSimulate(*args); });
 }
 

@@ -76,6 +76,11 @@ struct Odometry::Impl {
     return nullptr;
   }
 
+  bool usesSurfacePoints(const std::string& sensor) const {
+    if (cfg.surface_points == SurfacePoints::kAll) return true;
+    return cfg.surface_points == SurfacePoints::kSolidState && setupOf(sensor)->extrinsic.kind == LidarKind::kSolidState;
+  }
+
   // ---- stage: de-skew, features, bad frame, merge ----
   Features extract(const lidar::AlignedSweep& sweep, const lidar::SweepMotion& motion, SweepResult* out) {
     const double end_s = toSec(sweep.end_ns - sweep.start_ns);
@@ -105,7 +110,7 @@ struct Odometry::Impl {
     std::size_t n_edges = 0, n_planes = 0, n_points = 0;
     for (std::size_t i = 0; i < scans.size(); ++i) {
       n_edges += clouds[i].edges.size();
-      n_planes += clouds[i].planes.size();
+      n_planes += usesSurfacePoints(scans[i]->sensor) ? deskewed[i].points.size() : clouds[i].planes.size();
       n_points += deskewed[i].points.size();
     }
     edges.reserve(n_edges);
@@ -113,7 +118,7 @@ struct Odometry::Impl {
     if (cfg.keep_points) out->points_body.reserve(n_points);
     for (std::size_t i = 0; i < scans.size(); ++i) {
       const Eigen::Isometry3f T = setupOf(scans[i]->sensor)->extrinsic.T_imu_sensor.cast<float>();
-      auto toBody = [&T](std::vector<Point>& pts, std::vector<Point>* dst) {
+      auto toBody = [&T](const std::vector<Point>& pts, std::vector<Point>* dst) {
         for (Point p : pts) {
           p.xyz = T * p.xyz;
           dst->push_back(p);
@@ -121,7 +126,7 @@ struct Odometry::Impl {
       };
       if (!stats[i].bad_frame) {
         toBody(clouds[i].edges, &edges);
-        toBody(clouds[i].planes, &planes);
+        toBody(usesSurfacePoints(scans[i]->sensor) ? deskewed[i].points : clouds[i].planes, &planes);
       }
       if (cfg.keep_points) toBody(deskewed[i].points, &out->points_body);
     }

@@ -57,6 +57,9 @@ void bind(YamlBinder& b, BadFrameConfig& c) {
 void bind(YamlBinder& b, OdometryConfig& c) {
   b.field("edge_voxel_m", c.edge_voxel_m, "voxel size for downsampling edge features, m");
   b.field("plane_voxel_m", c.plane_voxel_m, "voxel size for downsampling plane features, m");
+  b.field("surface_points", c.surface_points,
+          "LiDARs whose every return (not only scan-line plane features) is matched point-to-plane, the map's "
+          "local plane fit deciding: solid_state | all | none");
   b.field("map_voxel_m", c.map_voxel_m, "local map resolution, m");
   b.field("local_map_radius_m", c.local_map_radius_m, "local map kept around the current pose, m");
   b.field("window_size", c.window_size, "keyframes in the sliding window");
@@ -253,6 +256,8 @@ void validateRigConfig(const RigConfig& cfg) {
   const OdometryConfig& o = cfg.odometry;
   check.positive(o.edge_voxel_m, "odometry.edge_voxel_m");
   check.positive(o.plane_voxel_m, "odometry.plane_voxel_m");
+  check.require(o.surface_points == "solid_state" || o.surface_points == "all" || o.surface_points == "none",
+                "odometry.surface_points", "must be solid_state, all or none, got '" + o.surface_points + "'");
   check.positive(o.map_voxel_m, "odometry.map_voxel_m");
   check.positive(o.local_map_radius_m, "odometry.local_map_radius_m");
   check.positive(o.window_size, "odometry.window_size");

@@ -23,6 +23,9 @@ estimator::OdometryConfig odometryConfig(const io::RigConfig& cfg) {
   const auto& od = cfg.odometry;
   o.edge_voxel_m = od.edge_voxel_m;
   o.plane_voxel_m = od.plane_voxel_m;
+  o.surface_points = od.surface_points == "all"           ? estimator::SurfacePoints::kAll
+                     : od.surface_points == "solid_state" ? estimator::SurfacePoints::kSolidState
+                                                          : estimator::SurfacePoints::kNone;
   o.map_voxel_m = od.map_voxel_m;
   o.local_map_radius_m = od.local_map_radius_m;
   o.window_size = od.window_size;

@@ -55,9 +55,19 @@ std::vector<Beam> livoxBeams(const LivoxConfig& config, int frame_index) {
     const double t_local = f * firing_s;
     const double t = frame_index * period_s + t_local;  // since the sensor started
     for (int line = 0; line < config.num_lines; ++line) {
-      // Lines are spread over the vertical drift and slightly over the horizontal phase.
-      const double u_h = std::sin(2 * M_PI * config.horizontal_hz * t + 0.37 * line);
-      const double u_v = triangle(config.vertical_hz * t + static_cast<double>(line) / config.num_lines);
+      double u_h = 0, u_v = 0;  // in [-1, 1] across the view
+      if (config.pattern == SolidStatePattern::kLissajous) {
+        // Lines are spread over the vertical drift and slightly over the horizontal phase.
+        u_h = std::sin(2 * M_PI * config.horizontal_hz * t + 0.37 * line);
+        u_v = triangle(config.vertical_hz * t + static_cast<double>(line) / config.num_lines);
+      } else {
+        // Two counter-rotating unit circles, half each: the sum stays in the unit disc; lines are
+        // spread over the phase of the slow prism.
+        const double fast = 2 * M_PI * config.rosette_fast_hz * t;
+        const double slow = -2 * M_PI * config.rosette_slow_hz * t + 2 * M_PI * line / config.num_lines;
+        u_h = 0.5 * (std::cos(fast) + std::cos(slow));
+        u_v = 0.5 * (std::sin(fast) + std::sin(slow));
+      }
       Beam b;
       b.dir = direction(half_h * u_h, half_v * u_v);
       b.time_s = static_cast<float>(t_local);

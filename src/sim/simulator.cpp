@@ -24,9 +24,16 @@ Simulator::Simulator(SimOptions options) : options_(std::move(options)) {
   scenario_ = makeScenario(options_.scenario);
   scene_ = Scene(scenario_.boxes);
   motion_ = SplineMotion(walkKeyframes(scenario_.waypoints, scenario_.walk, options_.duration_s));
+  livox_.pattern = options_.livox_pattern;
   velodyne_beams_ = velodyneBeams(velodyne_);
+  drawMount();
 
+  imu_noise_ = options_.imu;
   imu_noise_.initial_bias.acc_m_s2 = Eigen::Vector3d(0.02, -0.015, 0.02);
+  if (options_.acc_bias_m_s2 >= 0)
+    for (int a = 0; a < 3; ++a)
+      imu_noise_.initial_bias.acc_m_s2[a] =
+          options_.acc_bias_m_s2 * (unitFromHash(hashKey(options_.seed, kImuId, 7, a)) < 0.5 ? -1.0 : 1.0);
   imu_noise_.initial_bias.gyro_rad_s = Eigen::Vector3d(0.003, -0.002, 0.0025);
 
   const double dt = 1.0 / imu_noise_.rate_hz;
@@ -95,21 +102,42 @@ ImuSample Simulator::idealImu(Stamp stamp_ns) const {
 }
 
 int Simulator::numVelodyneSweeps() const {
-  const double first_s = toSec(kVelodynePhaseNs);
+  const double first_s = toSec(velodyne_phase_ns_);
   return std::max(0, static_cast<int>(std::floor((durationS() - first_s) / 0.1 + 1e-9)));
 }
 
 int Simulator::numLivoxFrames() const { return std::max(0, static_cast<int>(std::floor(durationS() / 0.1 + 1e-9))); }
 
+void Simulator::drawMount() {
+  auto rotation = [](double yaw_deg, double pitch_deg, double roll_deg) {
+    return (Eigen::AngleAxisd(deg(yaw_deg), Eigen::Vector3d::UnitZ()) *
+            Eigen::AngleAxisd(deg(pitch_deg), Eigen::Vector3d::UnitY()) *
+            Eigen::AngleAxisd(deg(roll_deg), Eigen::Vector3d::UnitX()))
+        .toRotationMatrix();
+  };
+  T_imu_velodyne_.setIdentity();
+  T_imu_velodyne_.linear() = rotation(3.0, -2.0, 1.5);
+  T_imu_velodyne_.translation() = Eigen::Vector3d(0.03, -0.02, 0.18);
+  T_imu_livox_.setIdentity();
+  T_imu_livox_.translation() = Eigen::Vector3d(0.05512, 0.02226, -0.0297);
+  if (!options_.random_mount) return;
+  constexpr std::uint64_t kMountId = 4;
+  auto uniform = [&](std::uint64_t i, double lo, double hi) {
+    return lo + (hi - lo) * unitFromHash(hashKey(options_.seed, kMountId, i));
+  };
+  T_imu_livox_.linear() = rotation(uniform(0, -15, 15), uniform(1, -5, 5), uniform(2, -5, 5));
+  T_imu_livox_.translation() = Eigen::Vector3d(uniform(3, -0.1, 0.1), uniform(4, -0.1, 0.1), uniform(5, -0.1, 0.1));
+  T_imu_velodyne_.linear() = rotation(uniform(6, -180, 180), uniform(7, -5, 5), uniform(8, -5, 5));
+  T_imu_velodyne_.translation() =
+      Eigen::Vector3d(uniform(9, -0.1, 0.1), uniform(10, -0.1, 0.1), 0.18 + uniform(11, -0.1, 0.1));
+  velodyne_phase_ns_ = static_cast<Stamp>(uniform(12, 0, 0.1) * 1e9);
+}
+
 LidarExtrinsic Simulator::velodyneExtrinsic() const {
   LidarExtrinsic e;
   e.name = "velodyne";
   e.kind = LidarKind::kSpinning;
-  e.T_imu_sensor.linear() = (Eigen::AngleAxisd(deg(3.0), Eigen::Vector3d::UnitZ()) *
-                             Eigen::AngleAxisd(deg(-2.0), Eigen::Vector3d::UnitY()) *
-                             Eigen::AngleAxisd(deg(1.5), Eigen::Vector3d::UnitX()))
-                                .toRotationMatrix();
-  e.T_imu_sensor.translation() = Eigen::Vector3d(0.03, -0.02, 0.18);
+  e.T_imu_sensor = T_imu_velodyne_;
   e.time_offset_s = options_.velodyne_time_offset_s;
   return e;
 }
@@ -118,14 +146,14 @@ LidarExtrinsic Simulator::livoxExtrinsic() const {
   LidarExtrinsic e;
   e.name = "livox";
   e.kind = LidarKind::kSolidState;
-  e.T_imu_sensor.translation() = Eigen::Vector3d(0.05512, 0.02226, -0.0297);
+  e.T_imu_sensor = T_imu_livox_;
   return e;
 }
 
 LidarScan Simulator::velodyneSweep(int k) const {
   if (k < 0 || k >= numVelodyneSweeps()) throw Error("velodyne sweep index " + std::to_string(k) + " out of range");
   LidarScan scan = cast(velodyne_beams_, velodyneTrueStartNs(k), velodyneExtrinsic().T_imu_sensor,
-                        velodyne_.range_noise_m, velodyne_.min_range_m, velodyne_.max_range_m, kVelodyneId, k);
+                        velodyne_.range_noise_m, velodyne_.min_range_m, velodyne_.max_range_m, kVelodyneId, k, false);
   scan.sensor = "velodyne";
   scan.start_ns -= fromSec(options_.velodyne_time_offset_s);
   return scan;
@@ -134,14 +162,15 @@ LidarScan Simulator::velodyneSweep(int k) const {
 LidarScan Simulator::livoxFrame(int k) const {
   if (k < 0 || k >= numLivoxFrames()) throw Error("livox frame index " + std::to_string(k) + " out of range");
   LidarScan scan = cast(livoxBeams(livox_, k), kSimStartNs + k * kFramePeriodNs, livoxExtrinsic().T_imu_sensor,
-                        livox_.range_noise_m, livox_.min_range_m, livox_.max_range_m, kLivoxId, k);
+                        livox_.range_noise_m, livox_.min_range_m, livox_.max_range_m, kLivoxId, k,
+                        options_.livox_no_returns_as_zero);
   scan.sensor = "livox";
   return scan;
 }
 
 LidarScan Simulator::cast(const std::vector<Beam>& beams, Stamp true_start_ns, const Eigen::Isometry3d& T_imu_sensor,
                           double range_noise_m, double min_range_m, double max_range_m, std::uint64_t sensor_id,
-                          int k) const {
+                          int k, bool keep_no_returns) const {
   std::vector<Point> points(beams.size());
   std::vector<char> valid(beams.size(), 0);
   const double t_start = toSec(true_start_ns - kSimStartNs);
@@ -151,10 +180,18 @@ LidarScan Simulator::cast(const std::vector<Beam>& beams, Stamp true_start_ns, c
       const Eigen::Isometry3d T_world_sensor = motion_.at(t_start + b.time_s).pose() * T_imu_sensor;
       const Eigen::Vector3d d = T_world_sensor.linear() * b.dir.cast<double>();
       const RayHit hit = scene_.cast(T_world_sensor.translation(), d, max_range_m);
-      if (hit.box < 0) continue;
-      const double range = hit.range_m + range_noise_m * normalFromKey(hashKey(options_.seed, sensor_id,
-                                                                               static_cast<std::uint64_t>(k), i));
-      if (range < min_range_m || range > max_range_m) continue;
+      const double range = hit.box < 0 ? 0.0
+                                       : hit.range_m + range_noise_m * normalFromKey(hashKey(options_.seed, sensor_id,
+                                                                                             static_cast<std::uint64_t>(k), i));
+      if (hit.box < 0 || range < min_range_m || range > max_range_m) {
+        if (keep_no_returns) {  // the driver's no-return point: (0,0,0) with its time
+          points[i].xyz.setZero();
+          points[i].time_s = b.time_s;
+          points[i].ring = b.ring;
+          valid[i] = 1;
+        }
+        continue;
+      }
       // Intensity: the surface reflectivity, dimmed at grazing incidence.
       const double cos_incidence = std::abs(d[hit.axis]);
       Point& p = points[i];

@@ -24,6 +24,13 @@
 
 namespace mmlio::estimator {
 
+/// Which LiDARs contribute every return as a plane candidate instead of only their scan-line plane
+/// features. A scan line crosses a far surface (a corridor's end wall 50 m away) in fewer points
+/// than a curvature neighbourhood needs, so line features never reach far; every return does, and
+/// the map's local plane fit (k nearest map points, residual and 2-D spread checks) decides which
+/// returns lie on a surface, whatever the scan pattern.
+enum class SurfacePoints { kNone, kSolidState, kAll };
+
 struct OdometryConfig {
   imu::ImuNoise imu_noise;
   imu::ImuInitConfig imu_init;
@@ -32,6 +39,7 @@ struct OdometryConfig {
   lidar::BadFrameConfig bad_frame;
   double edge_voxel_m = 0.2;            // downsampling of merged edge features
   double plane_voxel_m = 0.3;           // downsampling of merged plane features
+  SurfacePoints surface_points = SurfacePoints::kSolidState;
   double map_voxel_m = 0.2;             // local map resolution
   double local_map_radius_m = 60.0;     // local map kept around the current pose
   int window_size = 4;                  // keyframes in the sliding window

@@ -33,10 +33,18 @@ inline double velodyneRingElevationDeg(int ring) { return -15.0 + 2.0 * ring; }
 /// in the VLP-16 order (elevations -15, 1, -13, 3, ...); the head turns clockwise seen from above.
 std::vector<Beam> velodyneBeams(const VelodyneConfig& config);
 
-/// Livox-Horizon-like solid-state LiDAR: 6 lines scan the field of view together, each tracing a
-/// Lissajous-like curve (fast sinusoidal horizontal sweep, slow triangular vertical drift) with
-/// incommensurate frequencies, so the pattern never repeats and coverage grows with time.
+/// Solid-state scan pattern: both are non-repetitive (incommensurate frequencies), so coverage grows
+/// with time, but their lines have different shapes, which a feature extractor must not depend on.
+///  kLissajous: each line a fast sinusoidal horizontal sweep with a slow triangular vertical drift
+///              (nearly straight horizontal runs, turning back at the edges of the view; Horizon-like).
+///  kRosette:   each line the sum of two counter-rotating circles (Risley prisms; Mid-40 / Avia-like):
+///              petals that curve all the time and cross the centre of the view.
+enum class SolidStatePattern { kLissajous, kRosette };
+
+/// Livox-Horizon-like solid-state LiDAR: 6 lines scan the field of view together (see
+/// SolidStatePattern).
 struct LivoxConfig {
+  SolidStatePattern pattern = SolidStatePattern::kLissajous;
   double frame_rate_hz = 10.0;
   int points_per_frame = 24000;    // 6 lines fire together: points_per_frame / 6 firings
   int num_lines = 6;
@@ -44,6 +52,8 @@ struct LivoxConfig {
   double fov_vertical_deg = 25.1;
   double horizontal_hz = 47.31;    // full horizontal oscillations per second, per line
   double vertical_hz = 1.2833;     // triangular vertical drift cycles per second
+  double rosette_fast_hz = 73.13;  // rosette: the two prism rotation rates, opposite senses
+  double rosette_slow_hz = 41.71;
   double range_noise_m = 0.02;     // 1 sigma
   double max_range_m = 90.0;
   double min_range_m = 0.5;

@@ -8,11 +8,13 @@
 // t_true - velodyne_time_offset_s, so its extrinsic time_offset_s (t_imu = t_stamp + offset) is
 // velodyne_time_offset_s.
 //
-// Truth extrinsics (T_imu_sensor):
+// Truth extrinsics (T_imu_sensor), unless random_mount draws them from the seed:
 //   livox:    identity rotation, translation (0.05512, 0.02226, -0.0297) m;
 //   velodyne: R = Rz(3 deg) Ry(-2 deg) Rx(1.5 deg), translation (0.03, -0.02, 0.18) m.
+// random_mount: livox yaw +-15 deg, pitch/roll +-5 deg, translation +-10 cm; velodyne yaw any,
+// pitch/roll +-5 deg, translation +-10 cm about (0, 0, 0.18) m; Velodyne phase 0-100 ms.
 // IMU: 200 Hz, white noise + bias random walk (ImuNoiseConfig), constant initial biases
-// acc (0.02, -0.015, 0.02) m/s^2, gyro (0.003, -0.002, 0.0025) rad/s.
+// acc (0.02, -0.015, 0.02) m/s^2 (or acc_bias_m_s2 per axis), gyro (0.003, -0.002, 0.0025) rad/s.
 
 #include <memory>
 #include <string>
@@ -29,13 +31,6 @@ namespace mmlio::sim {
 constexpr Stamp kSimStartNs = 1700000000000000000LL;  // 2023-11-14T22:13:20Z
 constexpr Stamp kVelodynePhaseNs = 37000000LL;        // Velodyne sweeps start 37 ms after Livox frames
 
-struct SimOptions {
-  std::string scenario;                 // "office", "corridor", "hall"
-  double duration_s = 0;                // 0: the scenario's full walk (office ~40 s, corridor ~110 s, hall ~150 s)
-  std::uint64_t seed = 1;               // noise seed (the scene and the walk do not depend on it)
-  double velodyne_time_offset_s = 0;    // Velodyne stamps are written as t_true - offset
-};
-
 /// IMU noise model (continuous-time densities), Kalibr convention.
 struct ImuNoiseConfig {
   double rate_hz = 200.0;
@@ -44,6 +39,19 @@ struct ImuNoiseConfig {
   double acc_random_walk = 5e-4;        // m/s^3/sqrt(Hz)
   double gyro_random_walk = 5e-5;       // rad/s^2/sqrt(Hz)
   ImuBias initial_bias;                 // set by the simulator (see the header comment)
+};
+
+struct SimOptions {
+  std::string scenario;                 // "office", "corridor", "hall"
+  double duration_s = 0;                // 0: the scenario's full walk (office ~40 s, corridor ~110 s, hall ~150 s)
+  std::uint64_t seed = 1;               // noise seed (the scene and the walk do not depend on it)
+  double velodyne_time_offset_s = 0;    // Velodyne stamps are written as t_true - offset
+  // Variations for benchmarks that must not depend on one set of conditions:
+  ImuNoiseConfig imu;                   // densities; initial_bias is replaced by the simulator
+  double acc_bias_m_s2 = -1;            // >= 0: initial accelerometer bias of this size per axis, signs from the seed
+  SolidStatePattern livox_pattern = SolidStatePattern::kLissajous;
+  bool random_mount = false;            // both extrinsics and the Velodyne sweep phase drawn from the seed
+  bool livox_no_returns_as_zero = false;  // beams without a return become (0,0,0) points, as the Livox driver does
 };
 
 class Simulator {
@@ -72,7 +80,7 @@ class Simulator {
   /// Sweep k, sensor "velodyne", start_ns = true start - velodyne_time_offset_s.
   LidarScan velodyneSweep(int k) const;
   /// True start time of Velodyne sweep k.
-  Stamp velodyneTrueStartNs(int k) const { return kSimStartNs + kVelodynePhaseNs + k * 100000000LL; }
+  Stamp velodyneTrueStartNs(int k) const { return kSimStartNs + velodyne_phase_ns_ + k * 100000000LL; }
   int numLivoxFrames() const;
   /// Frame k, sensor "livox".
   LidarScan livoxFrame(int k) const;
@@ -86,7 +94,9 @@ class Simulator {
 
  private:
   LidarScan cast(const std::vector<Beam>& beams, Stamp true_start_ns, const Eigen::Isometry3d& T_imu_sensor,
-                 double range_noise_m, double min_range_m, double max_range_m, std::uint64_t sensor_id, int k) const;
+                 double range_noise_m, double min_range_m, double max_range_m, std::uint64_t sensor_id, int k,
+                 bool keep_no_returns) const;
+  void drawMount();
 
   SimOptions options_;
   Scenario scenario_;
@@ -100,6 +110,8 @@ class Simulator {
   std::vector<ImuSample> imu_;
   std::vector<ImuBias> true_bias_;  // at each IMU sample
   double path_length_m_ = 0.0;
+  Stamp velodyne_phase_ns_ = kVelodynePhaseNs;
+  Eigen::Isometry3d T_imu_velodyne_, T_imu_livox_;
 };
 
 }  // namespace mmlio::sim
