@@ -1,6 +1,7 @@
 // `mmlio evaluate`: compares an estimated TUM trajectory with ground truth (ATE, RPE per 10 m,
 // end-to-end error, coverage), optionally writing the evaluation figure.
 #include <cmath>
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -11,7 +12,10 @@
 #include "mmlio/core/error.hpp"
 #include "mmlio/eval/evaluation.hpp"
 #include "mmlio/eval/plot_evaluation.hpp"
+#include "mmlio/io/pcd_io.hpp"
 #include "mmlio/io/trajectory_writer.hpp"
+#include "mmlio/sim/scenarios.hpp"
+#include "mmlio/sim/scene.hpp"
 
 namespace mmlio::apps {
 namespace {
@@ -23,8 +27,36 @@ struct EvaluateArgs {
   bool json = false;
   bool no_align = false;
   bool scale = false;
+  std::string map_path;
+  std::string map_scenario;
   eval::EvalOptions options;
 };
+
+/// How far the points of a map lie from the true surfaces of a simulated scene, after the
+/// trajectory alignment (median and 90th percentile over at most 200k evenly strided points).
+struct MapSharpness {
+  std::size_t points = 0;
+  double median_m = 0.0, p90_m = 0.0;
+};
+
+MapSharpness mapSharpness(const std::string& map_path, const std::string& scenario, const Eigen::Isometry3d& T_gt_est) {
+  const sim::Scene scene(sim::makeScenario(scenario).boxes);
+  const std::vector<Point> map = io::readPcd(map_path);
+  if (map.empty()) throw Error("evaluate: map '" + map_path + "' has no points");
+  const std::size_t stride = std::max<std::size_t>(1, map.size() / 200000);
+  std::vector<double> d;
+  for (std::size_t i = 0; i < map.size(); i += stride) d.push_back(scene.distanceToSurface(T_gt_est * map[i].xyz.cast<double>()));
+  const auto at = [&d](double q) {
+    const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(d.size() - 1));
+    std::nth_element(d.begin(), d.begin() + k, d.end());
+    return d[static_cast<std::size_t>(k)];
+  };
+  MapSharpness s;
+  s.points = map.size();
+  s.median_m = at(0.5);
+  s.p90_m = at(0.9);
+  return s;
+}
 
 Trajectory readNonEmptyTum(const std::string& path, const char* what) {
   std::error_code error;
@@ -83,9 +115,25 @@ void runEvaluate(const EvaluateArgs& args) {
   const eval::EvalResult result = eval::evaluate(gt, est, options);
   if (!args.plot_path.empty()) eval::plotEvaluation(result, args.plot_path);
 
-  if (args.json) std::cout << eval::toJsonLine(result) << '\n';
-  else {
+  MapSharpness map;
+  if (!args.map_path.empty()) map = mapSharpness(args.map_path, args.map_scenario, result.T_gt_est);
+  if (args.json) {
+    std::string line = eval::toJsonLine(result);
+    if (!args.map_path.empty() && !line.empty() && line.back() == '}') {
+      char extra[160];
+      std::snprintf(extra, sizeof(extra), ", \"map_points\": %zu, \"map_median_m\": %.5f, \"map_p90_m\": %.5f}", map.points,
+                    map.median_m, map.p90_m);
+      line.pop_back();
+      line += extra;
+    }
+    std::cout << line << '\n';
+  } else {
     printTable(result, args);
+    if (!args.map_path.empty()) {
+      std::cout << row("map points", static_cast<double>(map.points), "", "%.0f");
+      std::cout << row("map to true surfaces", map.median_m, "m median");
+      std::cout << row("map to true surfaces", map.p90_m, "m 90th percentile");
+    }
     if (!args.plot_path.empty()) std::cout << "  plot                   " << args.plot_path << '\n';
   }
 }
@@ -107,6 +155,11 @@ void registerEvaluateCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--no-align", args->no_align, "Compare in the raw frames (no Umeyama alignment)");
   cmd->add_flag("--scale", args->scale, "Also estimate a scale in the alignment (Sim(3))");
+  cmd->add_option("--map", args->map_path,
+                  "Also score this map (PCD, estimate frame) against the true surfaces of --scenario (simulated runs)");
+  cmd->add_option("--scenario", args->map_scenario, "Simulated scenario whose surfaces --map is scored against")
+      ->check(CLI::IsMember(sim::scenarioNames()));
+  cmd->get_option("--map")->needs(cmd->get_option("--scenario"));
   cmd->callback([args] { runEvaluate(*args); });
 }
 

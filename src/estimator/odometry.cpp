@@ -4,6 +4,8 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <deque>
 #include <unordered_map>
@@ -148,14 +150,16 @@ struct Odometry::Impl {
 
   // ---- stage: scan-to-map registration of one sweep with an IMU factor to the previous one ----
   std::size_t registerSweep(const Features& f, const std::shared_ptr<imu::Preintegration>& pre, const NavState& prev,
-                            NavState* state) {
+                            NavState* state, SweepResult* out) {
+    const NavState predicted = *state;
+    std::vector<MapMatch> matches;
     StateBlocks xi = toBlocks(prev), xj = toBlocks(*state);
     double prev_sb[9];
     std::copy(xi.speed_bias, xi.speed_bias + 9, prev_sb);
     std::size_t used = 0;
     const int rounds = std::max(1, cfg.match_rounds);
     for (int round = 0; round < rounds; ++round) {
-      const std::vector<MapMatch> matches = findMapMatches(f, poseOf(xj.pose), edge_map, plane_map);
+      matches = findMapMatches(f, poseOf(xj.pose), edge_map, plane_map);
       used = matches.size();
       if (used < kMinCorrespondences) return used;
       ceres::Problem::Options po;
@@ -176,6 +180,19 @@ struct Odometry::Impl {
       ceres::Solve(odometrySolverOptions(std::max(2, cfg.max_iterations / rounds)), &problem, &summary);
     }
     *state = fromBlocks(xj, state->stamp_ns);
+    // What did the LiDARs constrain? Along what they could not, nearest-neighbour associations only
+    // drag the pose: keep the IMU prediction there.
+    out->degeneracy = analyseDegeneracy(matchInformation(matches, state->pose(), cfg.huber_loss_m), cfg.degeneracy);
+    out->registered = true;
+    if (cfg.remap_degenerate && !std::getenv("MMLIO_NOREMAP") && out->degeneracy.any())
+      out->remapped_directions =
+          remapDegenerateDirections(out->degeneracy, cfg.degeneracy, predicted.p_world, predicted.q_world_body,
+                                    predicted.v_world, &state->p_world, &state->q_world_body, &state->v_world);
+    if (std::getenv("MMLIO_DEGEN"))
+      std::fprintf(stderr, "DEGEN %.2f t %.1f r %.1f dir %.2f %.2f %.2f remap %d\n", toSec(state->stamp_ns) - 1.7e9,
+                   out->degeneracy.translation_points, out->degeneracy.rotation_points,
+                   out->degeneracy.weak_translation.x(), out->degeneracy.weak_translation.y(),
+                   out->degeneracy.weak_translation.z(), out->remapped_directions);
     return used;
   }
 
@@ -293,7 +310,7 @@ SweepResult Odometry::process(const lidar::AlignedSweep& sweep) {
   NavState state = predicted;
   bool tracked = true;
   if (!d.plane_map.empty() && imu_ok) {
-    out.correspondences = d.registerSweep(features, pre, prev, &state);
+    out.correspondences = d.registerSweep(features, pre, prev, &state, &out);
     if (out.correspondences < kMinCorrespondences) {
       tracked = false;
       state = predicted;

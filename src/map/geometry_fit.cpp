@@ -24,7 +24,8 @@ Scatter scatterOf(const std::vector<Eigen::Vector3d>& pts) {
     cov += d * d.transpose();
   }
   cov /= static_cast<double>(pts.size());
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+  es.computeDirect(cov);  // closed form: the fits run per correspondence, several times per sweep
   s.eigenvalues = es.eigenvalues();
   s.eigenvectors = es.eigenvectors();
   return s;

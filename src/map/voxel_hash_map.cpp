@@ -63,7 +63,9 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
   const double max_d2 = max_dist_m * max_dist_m;
   const Key c = keyOf(q);
   // Candidates (squared distance, point), kept as a max-heap of the k best.
-  std::vector<std::pair<double, const Eigen::Vector3d*>> best;
+  // Reused per thread: a query allocates nothing (queries run millions of times per run).
+  thread_local std::vector<std::pair<double, const Eigen::Vector3d*>> best;
+  best.clear();
   best.reserve(static_cast<std::size_t>(k) + 1);
   const auto cmp = [](const auto& a, const auto& b) { return a.first < b.first; };
   const auto visit = [&](const Key& key) {

@@ -176,6 +176,27 @@ Scenario corridor() {
   return s;
 }
 
+// The corridor walked from a blind start: the rig stands 0.65 m in front of the start wall (the
+// solid-state LiDAR 0.6 m from it, seeing nothing else), sways +-15 deg for about 4 s, turns
+// round, walks the corridor and its U-turn, and comes back into the same dead end.
+Scenario corridorBlind() {
+  Scenario s = corridor();
+  s.name = "corridor_blind";
+  const double x0 = 0.65, sway = 15.0 * M_PI / 180.0;
+  std::vector<Waypoint> w = {{x0, 0.0, M_PI}};
+  for (int i = 0; i < 8; ++i) w.push_back({x0, 0.0, M_PI + (i % 2 == 0 ? sway : -sway)});
+  w.push_back({x0, 0.0, M_PI});
+  w.push_back({x0, 0.0, 2 * M_PI});
+  for (std::size_t i = 0; i + 1 < s.waypoints.size(); ++i) {
+    Waypoint p = s.waypoints[i];
+    p.yaw_rad += 2 * M_PI;
+    w.push_back(p);
+  }
+  w.push_back({x0, 0.0, 3 * M_PI});
+  s.waypoints = w;
+  return s;
+}
+
 Scenario hall() {
   Scenario s;
   s.name = "hall";
@@ -224,13 +245,14 @@ Scenario hall() {
 
 }  // namespace
 
-std::vector<std::string> scenarioNames() { return {"office", "corridor", "hall"}; }
+std::vector<std::string> scenarioNames() { return {"office", "corridor", "corridor_blind", "hall"}; }
 
 Scenario makeScenario(const std::string& name) {
   if (name == "office") return office();
   if (name == "corridor") return corridor();
+  if (name == "corridor_blind") return corridorBlind();
   if (name == "hall") return hall();
-  throw Error("unknown scenario '" + name + "'; valid scenarios: office, corridor, hall");
+  throw Error("unknown scenario '" + name + "'; valid scenarios: office, corridor, corridor_blind, hall");
 }
 
 }  // namespace mmlio::sim

@@ -48,7 +48,7 @@ TEST(Simulator, UnknownScenarioThrowsNamingTheValidOnes) {
 }
 
 TEST(Simulator, StartsAtRestAndEndsAtRestAtTheStartPose) {
-  for (const std::string name : {"office", "corridor", "hall"}) {
+  for (const std::string name : {"office", "corridor", "corridor_blind", "hall"}) {
     const Simulator sim(opts(name, name == "office" ? 0.0 : 12.0));
     const Trajectory& gt = sim.groundTruth();
     ASSERT_GT(gt.size(), 100u);

@@ -16,6 +16,7 @@
 
 #include "mmlio/core/timer.hpp"
 #include "mmlio/core/types.hpp"
+#include "mmlio/estimator/degeneracy.hpp"
 #include "mmlio/imu/imu_noise.hpp"
 #include "mmlio/imu/initializer.hpp"
 #include "mmlio/lidar/bad_frame.hpp"
@@ -54,6 +55,8 @@ struct OdometryConfig {
   double prior_sigma_ba = 0.005;        // ... its accelerometer bias, m/s^2
   double prior_sigma_bg = 0.0005;       // ... its gyroscope bias, rad/s
   bool keep_points = true;              // return de-skewed points for the map
+  DegeneracyConfig degeneracy;          // when a sweep's LiDAR information is too weak in a direction
+  bool remap_degenerate = true;         // keep the IMU prediction along the directions found degenerate
 };
 
 /// One LiDAR of the rig as the estimator sees it.
@@ -76,6 +79,9 @@ struct SweepResult {
   bool keyframe = false;
   std::vector<LidarFrameStats> lidars;
   std::size_t correspondences = 0;
+  Degeneracy degeneracy;                // of the scan-to-map registration (valid when registered)
+  bool registered = false;              // matched against the map (not the first sweep, not degraded)
+  int remapped_directions = 0;          // directions where the IMU prediction was kept
   std::vector<Point> points_body;       // de-skewed points in the body frame at the window end
   std::string note;                     // why degraded
   StageTimes times_ms;

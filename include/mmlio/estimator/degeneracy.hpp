@@ -1,0 +1,63 @@
+#pragma once
+// What the LiDAR correspondences of one sweep constrain (Zhang, Kaess & Singh 2016, "On
+// degeneracy of optimization-based state estimation problems"): the 6x6 information of the pose
+// (world-frame translation, body-frame rotation) from its point-to-plane / point-to-edge matches,
+// each whitened by the point noise. Its eigen-analysis names the directions the LiDARs cannot
+// observe — a corridor's axis, the wall-normal plane of a blind solid-state frame — and the
+// registration keeps the IMU prediction along them (solution remapping) instead of letting
+// nearest-neighbour associations drag the pose there.
+//
+// Information is expressed as "effective points": an eigenvalue times sigma^2, i.e. how many
+// perfectly aligned plane points the LiDARs' evidence along that direction is worth (for a
+// rotation, per metre of lever arm). Translation and rotation are judged separately, each from
+// its Schur complement (the other block free), so a direction only counts as observed when
+// neither a rotation nor a translation can explain it away.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <vector>
+
+#include "mmlio/estimator/map_matching.hpp"
+
+namespace mmlio::estimator {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+/// Information of the pose from the matches, in effective points (J^T J with unit-normal plane
+/// and unit-direction edge residuals, no 1/sigma^2). Matches whose residual at T exceeds
+/// inlier_m are left out: a robust loss gives them no weight either.
+Matrix6d matchInformation(const std::vector<MapMatch>& matches, const Eigen::Isometry3d& T_world_body,
+                          double inlier_m);
+
+struct DegeneracyConfig {
+  double min_translation_points = 30.0;  // weakest translation direction worth fewer points: degenerate
+  double min_rotation_points = 30.0;     // the same for rotation (per metre of lever arm)
+};
+
+struct Degeneracy {
+  bool translation_degenerate = false, rotation_degenerate = false;
+  double translation_points = 0.0;                             // weakest translation eigenvalue
+  double rotation_points = 0.0;                                // weakest rotation eigenvalue
+  Eigen::Vector3d weak_translation = Eigen::Vector3d::UnitX();  // its direction (world frame)
+  Eigen::Vector3d weak_rotation = Eigen::Vector3d::UnitZ();     // its axis (body frame)
+  Eigen::Matrix3d translation_basis = Eigen::Matrix3d::Identity();  // eigenvectors, ascending
+  Eigen::Vector3d translation_eigenvalues = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d rotation_basis = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d rotation_eigenvalues = Eigen::Vector3d::Zero();
+
+  bool any() const { return translation_degenerate || rotation_degenerate; }
+};
+
+Degeneracy analyseDegeneracy(const Matrix6d& information, const DegeneracyConfig& cfg);
+
+/// Solution remapping: the solved pose and velocity keep the prediction's components along every
+/// translation direction (and rotation axis) below the thresholds; observed directions keep the
+/// solution. Returns how many directions were remapped.
+int remapDegenerateDirections(const Degeneracy& d, const DegeneracyConfig& cfg, const Eigen::Vector3d& p_predicted,
+                              const Eigen::Quaterniond& q_predicted, const Eigen::Vector3d& v_predicted,
+                              Eigen::Vector3d* p, Eigen::Quaterniond* q, Eigen::Vector3d* v);
+
+/// "forward", "left" or "up" (or their opposites' axis) for a body-frame direction: the body axis
+/// it is closest to, for the report.
+const char* bodyAxisName(const Eigen::Vector3d& direction_body);
+
+}  // namespace mmlio::estimator

@@ -1,0 +1,108 @@
+#include "mmlio/estimator/degeneracy.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+
+namespace mmlio::estimator {
+namespace {
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+// Schur complement of block `keep` (0: translation, 3: rotation) with the other block free.
+Eigen::Matrix3d schurBlock(const Matrix6d& H, int keep) {
+  const int other = 3 - keep;
+  const Eigen::Matrix3d A = H.block<3, 3>(keep, keep), B = H.block<3, 3>(keep, other), C = H.block<3, 3>(other, other);
+  // C may be singular (no rotation information at all): a pseudo-inverse keeps what is observable.
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+  Eigen::Vector3d inv = Eigen::Vector3d::Zero();
+  const double tol = 1e-9 * std::max(1.0, es.eigenvalues().maxCoeff());
+  for (int i = 0; i < 3; ++i)
+    if (es.eigenvalues()(i) > tol) inv(i) = 1.0 / es.eigenvalues()(i);
+  const Eigen::Matrix3d C_pinv = es.eigenvectors() * inv.asDiagonal() * es.eigenvectors().transpose();
+  return A - B * C_pinv * B.transpose();
+}
+
+}  // namespace
+
+Matrix6d matchInformation(const std::vector<MapMatch>& matches, const Eigen::Isometry3d& T_world_body,
+                          double inlier_m) {
+  Matrix6d H = Matrix6d::Zero();
+  const Eigen::Matrix3d R = T_world_body.linear();
+  for (const MapMatch& m : matches) {
+    const Eigen::Vector3d p_w = T_world_body * m.p_body;
+    if (m.kind == MapMatch::Kind::kPlane) {
+      const Eigen::Vector3d& n = m.a;
+      if (std::abs(n.dot(p_w) + m.b.x()) > inlier_m) continue;
+      Eigen::Matrix<double, 1, 6> J;
+      J.head<3>() = n.transpose();
+      J.tail<3>() = m.p_body.cross(R.transpose() * n).transpose();
+      H.noalias() += J.transpose() * J;
+    } else {
+      const Eigen::Matrix3d P = Eigen::Matrix3d::Identity() - m.b * m.b.transpose();
+      if ((P * (p_w - m.a)).norm() > inlier_m) continue;
+      Eigen::Matrix<double, 3, 6> J;
+      J.leftCols<3>() = P;
+      J.rightCols<3>() = -P * R * skew(m.p_body);
+      H.noalias() += J.transpose() * J;
+    }
+  }
+  return H;
+}
+
+Degeneracy analyseDegeneracy(const Matrix6d& information, const DegeneracyConfig& cfg) {
+  Degeneracy d;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> t(schurBlock(information, 0)), r(schurBlock(information, 3));
+  d.translation_basis = t.eigenvectors();
+  d.translation_eigenvalues = t.eigenvalues();
+  d.rotation_basis = r.eigenvectors();
+  d.rotation_eigenvalues = r.eigenvalues();
+  d.translation_points = std::max(0.0, t.eigenvalues()(0));
+  d.rotation_points = std::max(0.0, r.eigenvalues()(0));
+  d.weak_translation = t.eigenvectors().col(0);
+  d.weak_rotation = r.eigenvectors().col(0);
+  d.translation_degenerate = d.translation_points < cfg.min_translation_points;
+  d.rotation_degenerate = d.rotation_points < cfg.min_rotation_points;
+  return d;
+}
+
+int remapDegenerateDirections(const Degeneracy& d, const DegeneracyConfig& cfg, const Eigen::Vector3d& p_predicted,
+                              const Eigen::Quaterniond& q_predicted, const Eigen::Vector3d& v_predicted,
+                              Eigen::Vector3d* p, Eigen::Quaterniond* q, Eigen::Vector3d* v) {
+  int remapped = 0;
+  for (int i = 0; i < 3; ++i) {
+    if (d.translation_eigenvalues(i) >= cfg.min_translation_points) continue;
+    const Eigen::Vector3d u = d.translation_basis.col(i);
+    *p -= u * u.dot(*p - p_predicted);
+    *v -= u * u.dot(*v - v_predicted);
+    ++remapped;
+  }
+  Eigen::Vector3d dtheta = Eigen::AngleAxisd(q_predicted.conjugate() * *q).angle() *
+                           Eigen::AngleAxisd(q_predicted.conjugate() * *q).axis();
+  bool rotated = false;
+  for (int i = 0; i < 3; ++i) {
+    if (d.rotation_eigenvalues(i) >= cfg.min_rotation_points) continue;
+    const Eigen::Vector3d u = d.rotation_basis.col(i);
+    dtheta -= u * u.dot(dtheta);
+    rotated = true;
+    ++remapped;
+  }
+  if (rotated) {
+    const double angle = dtheta.norm();
+    *q = angle > 0 ? q_predicted * Eigen::Quaterniond(Eigen::AngleAxisd(angle, dtheta / angle)) : q_predicted;
+    q->normalize();
+  }
+  return remapped;
+}
+
+const char* bodyAxisName(const Eigen::Vector3d& direction_body) {
+  const Eigen::Vector3d a = direction_body.cwiseAbs();
+  if (a.x() >= a.y() && a.x() >= a.z()) return "forward";
+  if (a.y() >= a.z()) return "left";
+  return "up";
+}
+
+}  // namespace mmlio::estimator
