@@ -91,6 +91,7 @@ void printTable(const eval::EvalResult& r, const EvaluateArgs& args) {
   out += row("ATE mean", r.ate_mean_m, "m");
   out += row("ATE median", r.ate_median_m, "m");
   out += row("ATE max", r.ate_max_m, "m");
+  out += row("ATE rotation RMSE", r.ate_rot_rmse_deg, "deg");
   char segment[64];
   std::snprintf(segment, sizeof(segment), "RPE %g m translation", args.options.segment_m);
   out += row(segment, r.rpe_10m_pct, "%", "%.3f");
@@ -116,7 +117,7 @@ void runEvaluate(const EvaluateArgs& args) {
   if (!args.plot_path.empty()) eval::plotEvaluation(result, args.plot_path);
 
   MapSharpness map;
-  if (!args.map_path.empty()) map = mapSharpness(args.map_path, args.map_scenario, result.T_gt_est);
+  if (!args.map_path.empty()) map = mapSharpness(args.map_path, args.map_scenario, result.T_gt_est_pose);
   if (args.json) {
     std::string line = eval::toJsonLine(result);
     if (!args.map_path.empty() && !line.empty() && line.back() == '}') {

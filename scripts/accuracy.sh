@@ -1,42 +1,73 @@
 #!/usr/bin/env bash
-# Accuracy table of the README: simulates office, corridor and hall (default seeds), runs
-# HVI / VI / HI odometry without loop closure and HVI with it, and prints one markdown row per
-# run from `mmlio evaluate --json`.
-# Usage: scripts/accuracy.sh [OUT_DIR] [SCENARIOS...]   (default: accuracy_out office corridor hall)
+# The accuracy matrix of the README: every scene x seed x IMU noise level, each run in every mode
+# with the true calibration, several cells at a time through GNU parallel. Prints the median and
+# worst ATE, end-to-end error (% of path) and map sharpness per scene and mode, and keeps every
+# run's JSON line in OUT/results.jsonl.
+# Usage: scripts/accuracy.sh [OUT]   (default accuracy_out)
+#   SCENES="office corridor corridor_blind hall" SEEDS="1 2 3" NOISE="1 3 5" MODES="hvi vi hi"
+#   JOBS=2 (parallel cells; each run also uses TBB threads)
+#   scripts/accuracy.sh --list prints the job commands instead (one per line, for a cluster scheduler),
+#   scripts/accuracy.sh --summarise OUT prints the table of an existing results.jsonl.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+SCENES="${SCENES:-office corridor corridor_blind hall}"
+SEEDS="${SEEDS:-1 2 3}"
+NOISE="${NOISE:-1 3 5}"
+MODES="${MODES:-hvi vi hi}"
+JOBS="${JOBS:-2}"
+
+jobs() {
+  for sc in $SCENES; do for seed in $SEEDS; do for n in $NOISE; do
+    echo "scripts/accuracy_job.sh $1 $sc $seed $n $MODES"
+  done; done; done
+}
+
+summarise() {
+  python3 - "$1/results.jsonl" <<'PY'
+import json, statistics, sys
+rows = [json.loads(l) for l in open(sys.argv[1]) if l.strip()]
+order = {"hvi": 0, "vi": 1, "hi": 2, "hvi+loop": 3}
+def fmt(v, scale=100, unit="cm", digits=2):
+    return "n/a" if v is None else f"{v * scale:.{digits}f}{(' ' + unit) if unit else ''}"
+print("| scene | run | runs | ATE median | ATE worst | end-to-end % of path median / worst | map to surfaces median | HVI <= min(VI, HI) |")
+print("|---|---|---|---|---|---|---|---|")
+scenes = sorted({r["scene"] for r in rows}, key=lambda s: ["office", "corridor", "corridor_blind", "hall"].index(s)
+                if s in ["office", "corridor", "corridor_blind", "hall"] else 9)
+for sc in scenes:
+    cells = {}
+    for r in rows:
+        if r["scene"] == sc:
+            cells.setdefault((r["seed"], r["noise"]), {})[r["run"]] = r
+    for run in sorted({r["run"] for r in rows if r["scene"] == sc}, key=lambda m: order.get(m, 9)):
+        rs = [r for r in rows if r["scene"] == sc and r["run"] == run]
+        ok = [r for r in rs if r["status"] == "ok" and "ate_rmse_m" in r]
+        ate = [r["ate_rmse_m"] for r in ok]
+        e2e = [100 * r["end_to_end_m"] / r["path_length_m"] for r in ok if r.get("path_length_m")]
+        mp = [r["map_median_m"] for r in ok if "map_median_m" in r]
+        failed = len(rs) - len(ok)
+        beat = ""
+        if run == "hvi":
+            wins = 0; total = 0
+            for c in cells.values():
+                if "hvi" in c and "ate_rmse_m" in c["hvi"]:
+                    others = [c[m]["ate_rmse_m"] for m in ("vi", "hi") if m in c and "ate_rmse_m" in c[m]]
+                    if others:
+                        total += 1; wins += c["hvi"]["ate_rmse_m"] <= min(others) * 1.0 + 1e-9
+            beat = f"{wins}/{total}"
+        print(f"| {sc} | {run} | {len(ok)}{f' ({failed} failed)' if failed else ''} | "
+              f"{fmt(statistics.median(ate)) if ate else 'n/a'} | {fmt(max(ate)) if ate else 'n/a'} | "
+              f"{f'{statistics.median(e2e):.3f} / {max(e2e):.3f}' if e2e else 'n/a'} | "
+              f"{fmt(statistics.median(mp), 1000, 'mm', 1) if mp else 'n/a'} | {beat} |")
+PY
+}
+
+if [ "${1:-}" = "--list" ]; then jobs "${2:-accuracy_out}"; exit 0; fi
+if [ "${1:-}" = "--summarise" ]; then summarise "${2:-accuracy_out}"; exit 0; fi
 OUT="${1:-accuracy_out}"
-shift || true
-SCENARIOS=("${@:-office corridor hall}")
-read -r -a SCENARIOS <<< "${SCENARIOS[*]}"
+command -v parallel >/dev/null || { echo "accuracy.sh needs GNU parallel (Debian: apt-get install parallel)" >&2; exit 1; }
+command -v bc >/dev/null || { echo "accuracy.sh needs bc (Debian: apt-get install bc)" >&2; exit 1; }
 MMLIO="${MMLIO:-build/mmlio}"
 [ -x "$MMLIO" ] || scripts/build.sh --target mmlio
-
-echo "| scenario | path m | run | ATE RMSE m | RPE 10 m % | end-to-end m | end-to-end % of path | ms/sweep (odometry) |"
-echo "|---|---|---|---|---|---|---|---|"
-for sc in "${SCENARIOS[@]}"; do
-  [ -f "$OUT/$sc.bag" ] || "$MMLIO" -q simulate --scenario "$sc" --out "$OUT" >/dev/null
-  for run in hvi vi hi hvi+loop; do
-    mode="${run%+loop}"
-    loop_flag="--no-loop"
-    [ "$run" = "hvi+loop" ] && loop_flag=""
-    dir="$OUT/$sc-$run"
-    if ! "$MMLIO" -q run "$OUT/$sc.bag" --config "config/$mode.yaml" --calib "$OUT/${sc}_truth.yaml" \
-        $loop_flag --no-progress --out "$dir" > "$dir.log" 2>&1; then
-      echo "| $sc | | $run | failed: $(tail -n 1 "$dir.log") | | | | |"
-      continue
-    fi
-    python3 - "$sc" "$run" "$dir" "$OUT/${sc}_gt.tum" "$MMLIO" <<'PY'
-import json, subprocess, sys
-sc, run, d, gt, mmlio = sys.argv[1:]
-ev = json.loads(subprocess.check_output([mmlio, "evaluate", "--gt", gt, "--est", d + "/trajectory.tum", "--json"]))
-rep = json.load(open(d + "/report.json"))
-t = rep["timing"]
-odo = sum(t[s]["mean_ms"] for s in t if s not in ("total", "mapping_backend"))
-path = ev.get("path_length_m") or 0
-e2e = ev["end_to_end_m"]
-print(f"| {sc} | {path:.1f} | {run} | {ev['ate_rmse_m']:.4f} | {ev['rpe_10m_pct']:.3f} | {e2e:.3f} | "
-      f"{100 * e2e / path if path else float('nan'):.3f} | {odo:.1f} |")
-PY
-  done
-done
+mkdir -p "$OUT"
+jobs "$OUT" | parallel --will-cite -j "$JOBS" --line-buffer > "$OUT/results.jsonl"
+summarise "$OUT"

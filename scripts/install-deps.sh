@@ -9,6 +9,7 @@ PACKAGES=(
   libyaml-cpp-dev libcli11-dev libgtest-dev libbenchmark-dev libpng-dev
   librosbag-storage-dev pluginlib-dev libroscpp-dev libsensor-msgs-dev libstd-msgs-dev
   python3
+  parallel bc
 )
 
 missing=()

@@ -4,8 +4,6 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <deque>
 #include <unordered_map>
@@ -184,15 +182,10 @@ struct Odometry::Impl {
     // drag the pose: keep the IMU prediction there.
     out->degeneracy = analyseDegeneracy(matchInformation(matches, state->pose(), cfg.huber_loss_m), cfg.degeneracy);
     out->registered = true;
-    if (cfg.remap_degenerate && !std::getenv("MMLIO_NOREMAP") && out->degeneracy.any())
+    if (cfg.remap_degenerate && out->degeneracy.any())
       out->remapped_directions =
           remapDegenerateDirections(out->degeneracy, cfg.degeneracy, predicted.p_world, predicted.q_world_body,
                                     predicted.v_world, &state->p_world, &state->q_world_body, &state->v_world);
-    if (std::getenv("MMLIO_DEGEN"))
-      std::fprintf(stderr, "DEGEN %.2f t %.1f r %.1f dir %.2f %.2f %.2f remap %d\n", toSec(state->stamp_ns) - 1.7e9,
-                   out->degeneracy.translation_points, out->degeneracy.rotation_points,
-                   out->degeneracy.weak_translation.x(), out->degeneracy.weak_translation.y(),
-                   out->degeneracy.weak_translation.z(), out->remapped_directions);
     return used;
   }
 

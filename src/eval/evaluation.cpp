@@ -104,6 +104,25 @@ EvalResult evaluate(const Trajectory& gt, const Trajectory& est, const EvalOptio
   std::sort(sorted.begin(), sorted.end());
   const size_t mid = sorted.size() / 2;
   result.ate_median_m = sorted.size() % 2 ? sorted[mid] : 0.5 * (sorted[mid - 1] + sorted[mid]);
+  // Attitude error and map frame: positions alone leave the rotation about a straight walk's axis
+  // undetermined (a corridor, the office's back-and-forth), so this alignment also matches the tips
+  // of each pose's unit axes.
+  std::vector<Eigen::Vector3d> gt_tips, est_tips;
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    for (int a = -1; a < 3; ++a) {
+      const Eigen::Vector3d u = a < 0 ? Eigen::Vector3d(Eigen::Vector3d::Zero()) : Eigen::Vector3d(Eigen::Vector3d::Unit(a));
+      gt_tips.push_back(pairs[i].T_world_gt * u);
+      est_tips.push_back(pairs[i].T_world_est * u);
+    }
+  }
+  result.T_gt_est_pose = options.align ? alignUmeyama(gt_tips, est_tips, false).T_gt_est : Eigen::Isometry3d::Identity();
+  double rot_sq = 0.0;
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    const Eigen::Matrix3d R_est = result.T_gt_est_pose.linear() * pairs[i].T_world_est.linear();
+    const double a = Eigen::AngleAxisd(pairs[i].T_world_gt.linear().transpose() * R_est).angle() * 180.0 / M_PI;
+    rot_sq += a * a;
+  }
+  result.ate_rot_rmse_deg = std::sqrt(rot_sq / n);
 
   const RelativeError rpe = relativePoseError(gt_poses, est_poses, options.segment_m);
   result.rpe_10m_pct = rpe.translation_pct;
@@ -126,6 +145,7 @@ std::string toJsonLine(const EvalResult& r) {
   appendNumber(os, "ate_mean_m", r.ate_mean_m);
   appendNumber(os, "ate_median_m", r.ate_median_m);
   appendNumber(os, "ate_max_m", r.ate_max_m);
+  appendNumber(os, "ate_rot_rmse_deg", r.ate_rot_rmse_deg);
   appendNumber(os, "rpe_10m_pct", r.rpe_10m_pct);
   appendNumber(os, "rpe_10m_deg_per_m", r.rpe_10m_deg_per_m);
   appendCount(os, "rpe_num_segments", r.rpe_num_segments);

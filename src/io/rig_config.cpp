@@ -60,6 +60,11 @@ void bind(YamlBinder& b, OdometryConfig& c) {
   b.field("surface_points", c.surface_points,
           "LiDARs whose every return (not only scan-line plane features) is matched point-to-plane, the map's "
           "local plane fit deciding: solid_state | all | none");
+  b.field("degenerate_min_points", c.degenerate_min_points,
+          "a sweep is degenerate along a direction its map matches constrain less than this many perfectly "
+          "aligned plane points would (translation; rotation per metre of lever arm)");
+  b.field("remap_degenerate", c.remap_degenerate,
+          "keep the IMU prediction along degenerate directions instead of the registration's solution");
   b.field("map_voxel_m", c.map_voxel_m, "local map resolution, m");
   b.field("local_map_radius_m", c.local_map_radius_m, "local map kept around the current pose, m");
   b.field("window_size", c.window_size, "keyframes in the sliding window");
@@ -256,6 +261,7 @@ void validateRigConfig(const RigConfig& cfg) {
   const OdometryConfig& o = cfg.odometry;
   check.positive(o.edge_voxel_m, "odometry.edge_voxel_m");
   check.positive(o.plane_voxel_m, "odometry.plane_voxel_m");
+  check.nonNegative(o.degenerate_min_points, "odometry.degenerate_min_points");
   check.require(o.surface_points == "solid_state" || o.surface_points == "all" || o.surface_points == "none",
                 "odometry.surface_points", "must be solid_state, all or none, got '" + o.surface_points + "'");
   check.positive(o.map_voxel_m, "odometry.map_voxel_m");

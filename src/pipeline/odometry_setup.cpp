@@ -33,6 +33,9 @@ estimator::OdometryConfig odometryConfig(const io::RigConfig& cfg) {
   o.keyframe_translation_m = od.keyframe_translation_m;
   o.keyframe_interval_s = od.keyframe_interval_s;
   o.max_iterations = od.max_iterations;
+  o.degeneracy.min_translation_points = od.degenerate_min_points;
+  o.degeneracy.min_rotation_points = od.degenerate_min_points;
+  o.remap_degenerate = od.remap_degenerate;
   o.huber_loss_m = od.huber_loss_m;
   return o;
 }

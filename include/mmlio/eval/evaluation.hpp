@@ -24,6 +24,7 @@ struct EvalResult {
   double ate_mean_m = 0.0;
   double ate_median_m = 0.0;
   double ate_max_m = 0.0;
+  double ate_rot_rmse_deg = 0.0;   // attitude error (RMSE of the rotation angle) after T_gt_est_pose
   double rpe_10m_pct = 0.0;        // RPE translation over `segment_m` segments, % (NaN if path too short)
   double rpe_10m_deg_per_m = 0.0;  // RPE rotation, deg/m (NaN if path too short)
   size_t rpe_num_segments = 0;
@@ -35,7 +36,8 @@ struct EvalResult {
 
   std::vector<double> times_s;   // per associated pose: seconds since the first GT pose
   std::vector<double> errors_m;  // per associated pose: position error after alignment
-  Eigen::Isometry3d T_gt_est = Eigen::Isometry3d::Identity();  // estimate world -> GT world
+  Eigen::Isometry3d T_gt_est = Eigen::Isometry3d::Identity();  // estimate world -> GT world (positions)
+  Eigen::Isometry3d T_gt_est_pose = Eigen::Isometry3d::Identity();  // ... from positions and attitudes
   std::vector<Eigen::Vector3d> gt_xyz;           // associated GT positions
   std::vector<Eigen::Vector3d> est_xyz_aligned;  // associated estimate positions, aligned
 };

@@ -57,6 +57,8 @@ struct OdometryConfig {
   double edge_voxel_m = 0.2;             // downsampling of edge features
   double plane_voxel_m = 0.3;            // downsampling of plane features
   std::string surface_points = "solid_state";  // solid_state | all | none: every return is a plane candidate
+  double degenerate_min_points = 30.0;   // weaker LiDAR information along a direction: IMU prediction kept
+  bool remap_degenerate = true;          // keep the IMU prediction along degenerate directions
   double map_voxel_m = 0.2;              // local map resolution
   double local_map_radius_m = 60.0;      // local map kept around the current pose
   int window_size = 4;                   // keyframes in the sliding window
