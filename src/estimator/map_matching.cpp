@@ -27,12 +27,14 @@ std::vector<MapMatch> findMapMatches(const Features& f, const Eigen::Isometry3d&
         if (plane_map.knn(q, cfg.neighbours, cfg.max_distance_m, &nn) < cfg.neighbours) continue;
         const map::PlaneFit fit = map::fitPlane(nn, 0.1);
         if (!fit.ok) continue;
-        m = {MapMatch::Kind::kPlane, p, fit.normal, Eigen::Vector3d(fit.d, 0, 0)};
+        m = {MapMatch::Kind::kPlane, f.plane_source.empty() ? std::uint8_t{0} : f.plane_source[i], p, fit.normal,
+             Eigen::Vector3d(fit.d, 0, 0)};
       } else {
         if (edge_map.knn(q, cfg.neighbours, cfg.max_distance_m, &nn) < cfg.neighbours) continue;
         const map::LineFit fit = map::fitLine(nn, 3.0);
         if (!fit.ok) continue;
-        m = {MapMatch::Kind::kEdge, p, fit.point, fit.direction};
+        m = {MapMatch::Kind::kEdge, f.edge_source.empty() ? std::uint8_t{0} : f.edge_source[i - n_planes], p,
+             fit.point, fit.direction};
       }
       found[i] = 1;
     }

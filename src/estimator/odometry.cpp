@@ -45,6 +45,8 @@ struct Odometry::Impl {
   SlidingWindow window;
   std::shared_ptr<imu::Preintegration> pre_since_keyframe;
   std::size_t keyframes = 0;
+  std::vector<char> rejected_sources;  // of the last registration, by LiDAR index
+  std::vector<char> edge_poor;         // this sweep's solid-state frames the edge count marks bad
   ceres::Manifold* pose_manifold = nullptr;  // owned by the problems (kept alive separately)
 
   Impl(OdometryConfig c, std::vector<LidarSetup> l)
@@ -70,6 +72,12 @@ struct Odometry::Impl {
 
   std::vector<ImuSample> imuBuffer() const { return {imu.begin(), imu.end()}; }
 
+  std::size_t indexOf(const std::string& name) const {
+    for (std::size_t i = 0; i < lidars.size(); ++i)
+      if (lidars[i].extrinsic.name == name) return i;
+    return 0;
+  }
+
   const LidarSetup* setupOf(const std::string& name) const {
     for (const auto& s : lidars)
       if (s.extrinsic.name == name) return &s;
@@ -84,6 +92,7 @@ struct Odometry::Impl {
   // ---- stage: de-skew, features, bad frame, merge ----
   Features extract(const lidar::AlignedSweep& sweep, const lidar::SweepMotion& motion, SweepResult* out) {
     const double end_s = toSec(sweep.end_ns - sweep.start_ns);
+    edge_poor.assign(lidars.size(), 0);
     std::vector<const LidarScan*> scans;
     for (const auto& scan : sweep.scans)
       if (setupOf(scan.sensor)) scans.push_back(&scan);
@@ -118,13 +127,18 @@ struct Odometry::Impl {
     if (cfg.keep_points) out->points_body.reserve(n_points);
     for (std::size_t i = 0; i < scans.size(); ++i) {
       const Eigen::Isometry3f T = setupOf(scans[i]->sensor)->extrinsic.T_imu_sensor.cast<float>();
-      auto toBody = [&T](const std::vector<Point>& pts, std::vector<Point>* dst) {
+      const auto source = static_cast<std::uint8_t>(indexOf(scans[i]->sensor));
+      auto toBody = [&T, source](const std::vector<Point>& pts, std::vector<Point>* dst) {
         for (Point p : pts) {
           p.xyz = T * p.xyz;
+          p.source = source;
           dst->push_back(p);
         }
       };
-      if (!stats[i].bad_frame) {
+      // Judged by information, an edge-poor frame stays in until registration has seen what it constrains.
+      const bool keep_for_judgement = stats[i].bad_frame && cfg.bad_frame.by_information;
+      if (keep_for_judgement) edge_poor[source] = 1;
+      if (!stats[i].bad_frame || keep_for_judgement) {
         toBody(clouds[i].edges, &edges);
         toBody(usesSurfacePoints(scans[i]->sensor) ? deskewed[i].points : clouds[i].planes, &planes);
       }
@@ -133,12 +147,17 @@ struct Odometry::Impl {
     out->lidars = std::move(stats);
 
     Features f;
-    auto toVec = [](const std::vector<Point>& pts, std::vector<Eigen::Vector3d>* dst) {
+    // A voxel shared by two LiDARs keeps its first point's source.
+    auto toVec = [](const std::vector<Point>& pts, std::vector<Eigen::Vector3d>* dst, std::vector<std::uint8_t>* src) {
       dst->reserve(pts.size());
-      for (const Point& p : pts) dst->push_back(p.xyz.cast<double>());
+      src->reserve(pts.size());
+      for (const Point& p : pts) {
+        dst->push_back(p.xyz.cast<double>());
+        src->push_back(p.source);
+      }
     };
-    toVec(lidar::voxelDownsample(edges, cfg.edge_voxel_m), &f.edges);
-    toVec(lidar::voxelDownsample(planes, cfg.plane_voxel_m), &f.planes);
+    toVec(lidar::voxelDownsample(edges, cfg.edge_voxel_m), &f.edges, &f.edge_source);
+    toVec(lidar::voxelDownsample(planes, cfg.plane_voxel_m), &f.planes, &f.plane_source);
     // The map keeps the matched resolution: denser map clouds (0.1-0.2 m) were measured to fit
     // noisier local planes (office HVI ATE 1.2 -> 1.8-2.0 cm) although they are faster to search.
     f.map_edges = f.edges;
@@ -151,6 +170,7 @@ struct Odometry::Impl {
                             NavState* state, SweepResult* out) {
     const NavState predicted = *state;
     std::vector<MapMatch> matches;
+    std::vector<char> rejected(lidars.size(), 0);  // solid-state frames judged bad by their information
     StateBlocks xi = toBlocks(prev), xj = toBlocks(*state);
     double prev_sb[9];
     std::copy(xi.speed_bias, xi.speed_bias + 9, prev_sb);
@@ -158,6 +178,9 @@ struct Odometry::Impl {
     const int rounds = std::max(1, cfg.match_rounds);
     for (int round = 0; round < rounds; ++round) {
       matches = findMapMatches(f, poseOf(xj.pose), edge_map, plane_map);
+      if (round == 0) judgeLidars(matches, poseOf(xj.pose), &rejected, out);
+      matches.erase(std::remove_if(matches.begin(), matches.end(), [&](const MapMatch& m) { return rejected[m.source]; }),
+                    matches.end());
       used = matches.size();
       if (used < kMinCorrespondences) return used;
       ceres::Problem::Options po;
@@ -182,11 +205,50 @@ struct Odometry::Impl {
     // drag the pose: keep the IMU prediction there.
     out->degeneracy = analyseDegeneracy(matchInformation(matches, state->pose(), cfg.huber_loss_m), cfg.degeneracy);
     out->registered = true;
+    rejected_sources = rejected;
     if (cfg.remap_degenerate && out->degeneracy.any())
       out->remapped_directions =
           remapDegenerateDirections(out->degeneracy, cfg.degeneracy, predicted.p_world, predicted.q_world_body,
                                     predicted.v_world, &state->p_world, &state->q_world_body, &state->v_world);
     return used;
+  }
+
+  // Per LiDAR: what its own matches constrain at the predicted pose. A solid-state frame whose
+  // matches leave a translation direction unobserved (a wall filling its view, nothing in range)
+  // is a bad frame: its points leave the sweep.
+  void judgeLidars(const std::vector<MapMatch>& matches, const Eigen::Isometry3d& T, std::vector<char>* rejected,
+                   SweepResult* out) const {
+    for (LidarFrameStats& st : out->lidars) {
+      const std::size_t s = indexOf(st.sensor);
+      const Degeneracy d =
+          analyseDegeneracy(matchInformation(matches, T, cfg.huber_loss_m, static_cast<int>(s)), cfg.degeneracy);
+      st.translation_points = d.translation_points;
+      st.weak_axis = bodyAxisName(T.linear().transpose() * d.weak_translation);
+      (*rejected)[s] = edge_poor[s] && d.translation_degenerate;
+      st.bad_frame = (*rejected)[s] != 0;
+    }
+  }
+
+  static void dropSources(const std::vector<char>& rejected, std::vector<Eigen::Vector3d>* pts,
+                          std::vector<std::uint8_t>* src) {
+    if (src->size() != pts->size()) return;
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < pts->size(); ++i)
+      if (!rejected[(*src)[i]]) {
+        (*pts)[k] = (*pts)[i];
+        (*src)[k++] = (*src)[i];
+      }
+    pts->resize(k);
+    src->resize(k);
+  }
+
+  /// Bad frames found during registration leave the sweep's features (window and map).
+  void dropRejected(Features* f) const {
+    if (std::none_of(rejected_sources.begin(), rejected_sources.end(), [](char c) { return c != 0; })) return;
+    dropSources(rejected_sources, &f->edges, &f->edge_source);
+    dropSources(rejected_sources, &f->planes, &f->plane_source);
+    f->map_edges = f->edges;
+    f->map_planes = f->planes;
   }
 
   bool isKeyframe(const NavState& s) const {
@@ -302,6 +364,7 @@ SweepResult Odometry::process(const lidar::AlignedSweep& sweep) {
   // ---- registration ----
   NavState state = predicted;
   bool tracked = true;
+  d.rejected_sources = d.edge_poor;  // unless registration judges them by their information
   if (!d.plane_map.empty() && imu_ok) {
     out.correspondences = d.registerSweep(features, pre, prev, &state, &out);
     if (out.correspondences < kMinCorrespondences) {
@@ -310,6 +373,7 @@ SweepResult Odometry::process(const lidar::AlignedSweep& sweep) {
       out.note = "only " + std::to_string(out.correspondences) + " map correspondences: IMU prediction kept";
     }
   }
+  d.dropRejected(&features);
   out.times_ms.emplace_back("registration", watch.lapMs());
 
   // ---- keyframe, sliding window, map ----

@@ -49,7 +49,10 @@ void bind(YamlBinder& b, FeatureConfig& c) {
 }
 
 void bind(YamlBinder& b, BadFrameConfig& c) {
-  b.field("enabled", c.enabled, "drop solid-state frames with too little structure (paper: tau_e check)");
+  b.field("enabled", c.enabled, "drop solid-state frames with too little structure");
+  b.field("criterion", c.criterion,
+          "information (a frame whose own map matches leave a translation direction with fewer than "
+          "odometry.degenerate_min_points effective points is dropped) | edges (paper: tau_e, the count below)");
   b.field("min_edge_range_m", c.min_edge_range_m, "only edge points farther than this count, m");
   b.field("min_edge_points", c.min_edge_points, "tau_e: a frame with fewer counted edge points is bad");
 }
@@ -255,6 +258,8 @@ void validateRigConfig(const RigConfig& cfg) {
                 "must be <= features.edge_threshold");
   check.positive(cfg.features.continuity_jump_m, "features.continuity_jump_m");
 
+  check.require(cfg.bad_frame.criterion == "information" || cfg.bad_frame.criterion == "edges", "bad_frame.criterion",
+                "must be information or edges, got '" + cfg.bad_frame.criterion + "'");
   check.nonNegative(cfg.bad_frame.min_edge_range_m, "bad_frame.min_edge_range_m");
   check.nonNegative(cfg.bad_frame.min_edge_points, "bad_frame.min_edge_points");
 

@@ -17,6 +17,7 @@ estimator::OdometryConfig odometryConfig(const io::RigConfig& cfg) {
   o.features.continuity_jump_m = cfg.features.continuity_jump_m;
 
   o.bad_frame.enabled = cfg.bad_frame.enabled;
+  o.bad_frame.by_information = cfg.bad_frame.criterion == "information";
   o.bad_frame.min_edge_range_m = cfg.bad_frame.min_edge_range_m;
   o.bad_frame.min_edge_points = cfg.bad_frame.min_edge_points;
 

@@ -24,6 +24,7 @@ struct Point {
   float intensity = 0.f;                          // driver units (0..255 typical)
   float time_s = 0.f;                             // offset from the sweep start, s
   std::uint16_t ring = 0;                         // spinning-LiDAR ring or Livox line
+  std::uint8_t source = 0;                        // which LiDAR of the rig (estimator's index), once merged
 };
 
 /// How a LiDAR scans: decides the feature extractor's neighbourhood and the bad-frame check.

@@ -25,8 +25,9 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 /// Information of the pose from the matches, in effective points (J^T J with unit-normal plane
 /// and unit-direction edge residuals, no 1/sigma^2). Matches whose residual at T exceeds
 /// inlier_m are left out: a robust loss gives them no weight either.
+/// source >= 0: only the matches of that LiDAR.
 Matrix6d matchInformation(const std::vector<MapMatch>& matches, const Eigen::Isometry3d& T_world_body,
-                          double inlier_m);
+                          double inlier_m, int source = -1);
 
 struct DegeneracyConfig {
   double min_translation_points = 30.0;  // weakest translation direction worth fewer points: degenerate

@@ -6,6 +6,7 @@
 #include <ceres/cost_function.h>
 
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <vector>
 
 #include "mmlio/map/voxel_hash_map.hpp"
@@ -15,6 +16,7 @@ namespace mmlio::estimator {
 /// Body-frame features of one sweep.
 struct Features {
   std::vector<Eigen::Vector3d> edges, planes;          // matched against the map
+  std::vector<std::uint8_t> edge_source, plane_source;  // the LiDAR of each (empty: all from LiDAR 0)
   std::vector<Eigen::Vector3d> map_edges, map_planes;  // added to the map
 };
 
@@ -22,6 +24,7 @@ struct Features {
 struct MapMatch {
   enum class Kind { kPlane, kEdge };
   Kind kind = Kind::kPlane;
+  std::uint8_t source = 0;  // the LiDAR whose point this is
   Eigen::Vector3d p_body;
   Eigen::Vector3d a, b;  // plane: a = unit normal, b.x() = d (n.x + d = 0); edge: a = point, b = direction
 };

@@ -70,6 +70,10 @@ struct LidarFrameStats {
   std::size_t points = 0, edges = 0, planes = 0;
   bool bad_frame = false;
   int counted_edges = 0;  // solid state: edges beyond the bad-frame range
+  // This LiDAR's own map matches (registered sweeps only): weakest translation direction in
+  // effective points (-1: not registered), and the body axis it is nearest to.
+  double translation_points = -1.0;
+  const char* weak_axis = "";
 };
 
 struct SweepResult {

@@ -49,6 +49,7 @@ struct FeatureConfig {
 
 struct BadFrameConfig {
   bool enabled = true;              // drop solid-state frames too poor in structure
+  std::string criterion = "information";  // information | edges
   double min_edge_range_m = 2.0;    // only edges beyond this range count
   int min_edge_points = 100;        // tau_e: fewer counted edges -> bad frame
 };
