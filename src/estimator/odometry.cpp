@@ -205,6 +205,7 @@ struct Odometry::Impl {
     // drag the pose: keep the IMU prediction there.
     out->degeneracy = analyseDegeneracy(matchInformation(matches, state->pose(), cfg.huber_loss_m), cfg.degeneracy);
     out->registered = true;
+    out->degeneracy_threshold = cfg.degeneracy.min_translation_points;
     rejected_sources = rejected;
     if (cfg.remap_degenerate && out->degeneracy.any())
       out->remapped_directions =
@@ -218,6 +219,7 @@ struct Odometry::Impl {
   // is a bad frame: its points leave the sweep.
   void judgeLidars(const std::vector<MapMatch>& matches, const Eigen::Isometry3d& T, std::vector<char>* rejected,
                    SweepResult* out) const {
+    out->degeneracy_threshold = cfg.degeneracy.min_translation_points;
     for (LidarFrameStats& st : out->lidars) {
       const std::size_t s = indexOf(st.sensor);
       const Degeneracy d =

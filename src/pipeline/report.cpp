@@ -54,6 +54,7 @@ Json evaluationJson(const eval::EvalResult& ev) {
   Json j = Json::object();
   j["ate_rmse_m"] = ev.ate_rmse_m;
   j["ate_max_m"] = ev.ate_max_m;
+  j["ate_rot_rmse_deg"] = ev.ate_rot_rmse_deg;
   j["rpe_10m_pct"] = ev.rpe_10m_pct;
   j["rpe_10m_deg_per_m"] = ev.rpe_10m_deg_per_m;
   j["end_to_end_m"] = ev.end_to_end_m;

@@ -17,6 +17,7 @@
 #include "mmlio/pipeline/online_pipeline.hpp"
 #include "mmlio/pipeline/mapping_backend.hpp"
 #include "mmlio/pipeline/odometry_setup.hpp"
+#include "mmlio/pipeline/degeneracy_tally.hpp"
 #include "mmlio/pipeline/progress.hpp"
 #include "mmlio/pipeline/report.hpp"
 
@@ -47,6 +48,7 @@ RunResult runBag(const RunOptions& options) {
   RunResult result;
   std::map<std::string, LidarTally> tally;
   std::size_t tracked = 0, degraded = 0, initialising = 0;
+  DegeneracyTally degeneracy;
   auto onSweep = [&](const estimator::SweepResult& r) {
     if (r.status == estimator::SweepResult::Status::kInitializing) {
       ++initialising;
@@ -56,6 +58,7 @@ RunResult runBag(const RunOptions& options) {
     else ++tracked;
     Stopwatch t;
     result.trajectory.push_back({r.state.stamp_ns, r.state.pose()});
+    degeneracy.add(r);
     mapping.addSweep(r);
     StageTimes times = r.times_ms;
     times.emplace_back("mapping_backend", t.lapMs());
@@ -100,6 +103,7 @@ RunResult runBag(const RunOptions& options) {
           const double bag_s = toSec(odometry.lastImuNs() - source.beginNs());
           status.precision(3);
           status << online.sweepsProcessed() << " sweeps, " << odometry.keyframes() << " kf, "
+                 << degeneracy.degenerateSweeps() << " degenerate, "
                  << bag_s / std::max(1e-3, wall.elapsedMs() * 1e-3) << "x rt";
           progress.update((replay + src.progress()) / std::max(1, options.replays), status.str());
         }
@@ -163,7 +167,9 @@ RunResult runBag(const RunOptions& options) {
   sw["degraded"] = degraded;
   sw["initialising"] = initialising;
   sw["keyframes"] = odometry.keyframes();
+  sw["degenerate"] = degeneracy.degenerateSweeps();
   rep["sweeps"] = sw;
+  rep["degeneracy"] = degeneracy.toJson(source.beginNs(), cfg.odometry.degenerate_min_points, cfg.odometry.remap_degenerate);
 
   Json per_lidar = Json::object();
   for (const auto& [name, t] : tally) {

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -90,6 +91,22 @@ TEST(LivoxPattern, ConsecutiveFramesDiffer) {
   const LivoxConfig c;
   const auto a = livoxBeams(c, 0), b = livoxBeams(c, 1);
   EXPECT_GT((a[100].dir - b[100].dir).norm(), 1e-3);
+}
+
+TEST(LivoxPattern, RosetteStaysInTheViewAndCoversItWithOtherBeamsThanTheLissajous) {
+  LivoxConfig rosette;
+  rosette.pattern = SolidStatePattern::kRosette;
+  for (const Beam& b : livoxBeams(rosette, 3)) {
+    EXPECT_LE(std::abs(std::atan2(b.dir.y(), b.dir.x())) * kRadToDeg, rosette.fov_horizontal_deg / 2 + 1e-3);
+    EXPECT_LE(std::abs(std::asin(b.dir.z())) * kRadToDeg, rosette.fov_vertical_deg / 2 + 1e-3);
+  }
+  EXPECT_GT(coverage(rosette, 10), 0.6);
+  EXPECT_GT(coverage(rosette, 10), coverage(rosette, 1) + 0.1);
+  // Not the Lissajous pattern: the same beams point elsewhere.
+  const auto a = livoxBeams(rosette, 3), b = livoxBeams(LivoxConfig(), 3);
+  int different = 0;
+  for (std::size_t i = 0; i < a.size(); i += 100) different += (a[i].dir - b[i].dir).norm() > 0.05f ? 1 : 0;
+  EXPECT_GT(different, 200);
 }
 
 }  // namespace

@@ -187,5 +187,51 @@ TEST(Simulator, FrameCountsFitInsideTheSequence) {
   EXPECT_THROW(sim.livoxFrame(50), Error);
 }
 
+TEST(Simulator, RandomMountIsDrawnFromTheSeedWithinItsBoundsAndTheNominalMountOtherwise) {
+  SimOptions a = opts("office", 5.0, 7), b = opts("office", 5.0, 7), c = opts("office", 5.0, 8);
+  a.random_mount = b.random_mount = c.random_mount = true;
+  const Simulator sa(a), sb(b), sc(c), nominal(opts("office", 5.0, 7));
+  EXPECT_TRUE(sa.livoxExtrinsic().T_imu_sensor.isApprox(sb.livoxExtrinsic().T_imu_sensor));
+  EXPECT_EQ(sa.velodyneTrueStartNs(0), sb.velodyneTrueStartNs(0));
+  EXPECT_FALSE(sa.livoxExtrinsic().T_imu_sensor.isApprox(sc.livoxExtrinsic().T_imu_sensor));
+  EXPECT_LE(sa.livoxExtrinsic().T_imu_sensor.translation().cwiseAbs().maxCoeff(), 0.1);
+  EXPECT_LE(Eigen::AngleAxisd(sa.livoxExtrinsic().T_imu_sensor.linear()).angle(), (15.0 + 8.0) * M_PI / 180.0);
+  const Stamp phase = sa.velodyneTrueStartNs(0) - sa.startNs();
+  EXPECT_GE(phase, 0);
+  EXPECT_LT(phase, 100000000LL);
+  EXPECT_NEAR(nominal.livoxExtrinsic().T_imu_sensor.translation().x(), 0.05512, 1e-12);
+  EXPECT_EQ(nominal.velodyneTrueStartNs(0) - nominal.startNs(), kVelodynePhaseNs);
+}
+
+TEST(Simulator, LivoxNoReturnsBecomeZeroPointsWithTheirTimesWhenAsked) {
+  SimOptions with = opts("corridor", 5.0), without = opts("corridor", 5.0);
+  with.livox_no_returns_as_zero = true;
+  const LidarScan a = Simulator(with).livoxFrame(10), b = Simulator(without).livoxFrame(10);
+  EXPECT_EQ(a.points.size(), 24000u);  // every beam, as the driver publishes them
+  std::size_t zeros = 0;
+  for (const Point& p : a.points) zeros += p.xyz.isZero() ? 1 : 0;
+  EXPECT_EQ(a.points.size() - zeros, b.points.size());
+  for (std::size_t i = 0, j = 0; i < a.points.size(); ++i) {  // the returns themselves are the same
+    if (a.points[i].xyz.isZero()) continue;
+    EXPECT_TRUE(a.points[i].xyz.isApprox(b.points[j].xyz));
+    EXPECT_EQ(a.points[i].time_s, b.points[j++].time_s);
+  }
+}
+
+TEST(Simulator, ImuNoiseAndAccelerometerBiasFollowTheOptions) {
+  SimOptions quiet = opts("office", 6.0, 3), loud = opts("office", 6.0, 3);
+  quiet.imu.gyro_noise_density = 1e-4;
+  loud.imu.gyro_noise_density = 1e-3;
+  loud.acc_bias_m_s2 = 0.05;
+  const Simulator q(quiet), l(loud);
+  EXPECT_DOUBLE_EQ(l.initialBias().acc_m_s2.cwiseAbs().minCoeff(), 0.05);
+  double sq_q = 0, sq_l = 0;
+  for (std::size_t k = 0; k < 400; ++k) {  // the first 2 s are at rest: the gyro reads bias + noise
+    sq_q += (q.imu()[k].gyro_rad_s - q.initialBias().gyro_rad_s).squaredNorm();
+    sq_l += (l.imu()[k].gyro_rad_s - l.initialBias().gyro_rad_s).squaredNorm();
+  }
+  EXPECT_NEAR(std::sqrt(sq_l / sq_q), 10.0, 1.5);
+}
+
 }  // namespace
 }  // namespace mmlio::sim

@@ -86,6 +86,7 @@ struct SweepResult {
   Degeneracy degeneracy;                // of the scan-to-map registration (valid when registered)
   bool registered = false;              // matched against the map (not the first sweep, not degraded)
   int remapped_directions = 0;          // directions where the IMU prediction was kept
+  double degeneracy_threshold = 0.0;    // the translation threshold it was judged by, effective points
   std::vector<Point> points_body;       // de-skewed points in the body frame at the window end
   std::string note;                     // why degraded
   StageTimes times_ms;
