@@ -25,6 +25,9 @@ namespace mmlio::estimator {
 namespace {
 
 constexpr std::size_t kMinCorrespondences = 30;
+// Re-associate after a registration round only if the pose moved more than a tenth of the plane
+// voxel or a tenth of a degree: smaller moves leave the k nearest map points unchanged.
+constexpr double kReassociateRad = 0.1 * M_PI / 180.0;
 
 void integrateSamples(imu::Preintegration& pre, const std::vector<ImuSample>& samples) { pre.integrate(samples); }
 
@@ -169,6 +172,7 @@ struct Odometry::Impl {
   std::size_t registerSweep(const Features& f, const std::shared_ptr<imu::Preintegration>& pre, const NavState& prev,
                             NavState* state, SweepResult* out) {
     const NavState predicted = *state;
+    const double reassociate_m = 0.1 * cfg.plane_voxel_m;
     std::vector<MapMatch> matches;
     std::vector<char> rejected(lidars.size(), 0);  // solid-state frames judged bad by their information
     StateBlocks xi = toBlocks(prev), xj = toBlocks(*state);
@@ -177,7 +181,8 @@ struct Odometry::Impl {
     std::size_t used = 0;
     const int rounds = std::max(1, cfg.match_rounds);
     for (int round = 0; round < rounds; ++round) {
-      matches = findMapMatches(f, poseOf(xj.pose), edge_map, plane_map);
+      const Eigen::Isometry3d T_before = poseOf(xj.pose);
+      matches = findMapMatches(f, T_before, edge_map, plane_map);
       if (round == 0) judgeLidars(matches, poseOf(xj.pose), &rejected, out);
       matches.erase(std::remove_if(matches.begin(), matches.end(), [&](const MapMatch& m) { return rejected[m.source]; }),
                     matches.end());
@@ -199,6 +204,9 @@ struct Odometry::Impl {
       addMapResiduals(problem, xj.pose, matches, cfg.lidar_sigma_m, cfg.huber_loss_m);
       ceres::Solver::Summary summary;
       ceres::Solve(odometrySolverOptions(std::max(2, cfg.max_iterations / rounds)), &problem, &summary);
+      // Associations are redone to follow the pose; a pose that barely moved would find the same ones.
+      const Eigen::Isometry3d delta = T_before.inverse() * poseOf(xj.pose);
+      if (delta.translation().norm() < reassociate_m && Eigen::AngleAxisd(delta.linear()).angle() < kReassociateRad) break;
     }
     *state = fromBlocks(xj, state->stamp_ns);
     // What did the LiDARs constrain? Along what they could not, nearest-neighbour associations only
