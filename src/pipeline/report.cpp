@@ -16,14 +16,22 @@ namespace {
 
 // Renders a report object generically so report.md never disagrees with report.json:
 // scalars as a bullet list, objects of scalars as two-column tables, objects of objects
-// (timing, per-LiDAR figures) as one table with a column per inner key.
-void renderSection(std::string& md, const std::string& title, const Json& section) {
-  md += "\n## " + title + "\n\n";
-  bool nested = false;
-  for (const auto& [k, v] : section.members()) nested |= v.isObject();
-  if (!nested) {
+// (timing, per-LiDAR figures) as one table with a column per inner key, and a section mixing
+// both (degeneracy) as its fields' table followed by one subsection per object.
+void renderSection(std::string& md, const std::string& title, const Json& section, int level = 2) {
+  md += "\n" + std::string(static_cast<std::size_t>(level), '#') + " " + title + "\n\n";
+  bool nested = false, all_nested = !section.members().empty();
+  for (const auto& [k, v] : section.members()) {
+    nested |= v.isObject();
+    all_nested &= v.isObject();
+  }
+  if (!all_nested) {
     md += "| field | value |\n|---|---|\n";
-    for (const auto& [k, v] : section.members()) md += "| " + k + " | " + (v.isScalar() ? v.text() : v.dump(-1)) + " |\n";
+    for (const auto& [k, v] : section.members())
+      if (!v.isObject()) md += "| " + k + " | " + (v.isScalar() ? v.text() : v.dump(-1)) + " |\n";
+    if (nested)
+      for (const auto& [k, v] : section.members())
+        if (v.isObject()) renderSection(md, title + " / " + k, v, level + 1);
     return;
   }
   std::vector<std::string> columns;
