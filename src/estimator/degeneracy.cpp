@@ -64,7 +64,6 @@ Degeneracy analyseDegeneracy(const Matrix6d& information, const DegeneracyConfig
   d.translation_points = std::max(0.0, t.eigenvalues()(0));
   d.rotation_points = std::max(0.0, r.eigenvalues()(0));
   d.weak_translation = t.eigenvectors().col(0);
-  d.weak_rotation = r.eigenvectors().col(0);
   d.translation_degenerate = d.translation_points < cfg.min_translation_points;
   d.rotation_degenerate = d.rotation_points < cfg.min_rotation_points;
   return d;
@@ -81,8 +80,8 @@ int remapDegenerateDirections(const Degeneracy& d, const DegeneracyConfig& cfg, 
     *v -= u * u.dot(*v - v_predicted);
     ++remapped;
   }
-  Eigen::Vector3d dtheta = Eigen::AngleAxisd(q_predicted.conjugate() * *q).angle() *
-                           Eigen::AngleAxisd(q_predicted.conjugate() * *q).axis();
+  const Eigen::AngleAxisd solved_rotation(q_predicted.conjugate() * *q);
+  Eigen::Vector3d dtheta = solved_rotation.angle() * solved_rotation.axis();
   bool rotated = false;
   for (int i = 0; i < 3; ++i) {
     if (d.rotation_eigenvalues(i) >= cfg.min_rotation_points) continue;

@@ -183,7 +183,7 @@ struct Odometry::Impl {
     for (int round = 0; round < rounds; ++round) {
       const Eigen::Isometry3d T_before = poseOf(xj.pose);
       matches = findMapMatches(f, T_before, edge_map, plane_map);
-      if (round == 0) judgeLidars(matches, poseOf(xj.pose), &rejected, out);
+      if (round == 0) judgeLidars(matches, T_before, &rejected, out);
       matches.erase(std::remove_if(matches.begin(), matches.end(), [&](const MapMatch& m) { return rejected[m.source]; }),
                     matches.end());
       used = matches.size();
@@ -213,7 +213,6 @@ struct Odometry::Impl {
     // drag the pose: keep the IMU prediction there.
     out->degeneracy = analyseDegeneracy(matchInformation(matches, state->pose(), cfg.huber_loss_m), cfg.degeneracy);
     out->registered = true;
-    out->degeneracy_threshold = cfg.degeneracy.min_translation_points;
     rejected_sources = rejected;
     if (cfg.remap_degenerate && out->degeneracy.any())
       out->remapped_directions =
@@ -222,18 +221,16 @@ struct Odometry::Impl {
     return used;
   }
 
-  // Per LiDAR: what its own matches constrain at the predicted pose. A solid-state frame whose
-  // matches leave a translation direction unobserved (a wall filling its view, nothing in range)
-  // is a bad frame: its points leave the sweep.
+  // Per LiDAR: what its own matches constrain at the predicted pose. A solid-state frame the edge
+  // count marks bad (edge_poor) whose matches also leave a translation direction unobserved (a
+  // wall filling its view, nothing in range) is a bad frame: its points leave the sweep.
   void judgeLidars(const std::vector<MapMatch>& matches, const Eigen::Isometry3d& T, std::vector<char>* rejected,
                    SweepResult* out) const {
-    out->degeneracy_threshold = cfg.degeneracy.min_translation_points;
     for (LidarFrameStats& st : out->lidars) {
       const std::size_t s = indexOf(st.sensor);
       const Degeneracy d =
           analyseDegeneracy(matchInformation(matches, T, cfg.huber_loss_m, static_cast<int>(s)), cfg.degeneracy);
       st.translation_points = d.translation_points;
-      st.weak_axis = bodyAxisName(T.linear().transpose() * d.weak_translation);
       (*rejected)[s] = edge_poor[s] && d.translation_degenerate;
       st.bad_frame = (*rejected)[s] != 0;
     }

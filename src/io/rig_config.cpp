@@ -51,8 +51,9 @@ void bind(YamlBinder& b, FeatureConfig& c) {
 void bind(YamlBinder& b, BadFrameConfig& c) {
   b.field("enabled", c.enabled, "drop solid-state frames with too little structure");
   b.field("criterion", c.criterion,
-          "information (a frame whose own map matches leave a translation direction with fewer than "
-          "odometry.degenerate_min_points effective points is dropped) | edges (paper: tau_e, the count below)");
+          "information (a frame with too few edges, see below, is dropped only if its own map matches "
+          "also leave a translation direction with fewer than odometry.degenerate_min_points effective points) | "
+          "edges (paper: tau_e, the edge count alone)");
   b.field("min_edge_range_m", c.min_edge_range_m, "only edge points farther than this count, m");
   b.field("min_edge_points", c.min_edge_points, "tau_e: a frame with fewer counted edge points is bad");
 }

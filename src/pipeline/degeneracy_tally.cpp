@@ -23,7 +23,7 @@ void DegeneracyTally::add(const estimator::SweepResult& r) {
     ++p.judged;
     p.points.push_back(l.translation_points);
     // The same threshold as the sweep's: this LiDAR alone would have left a direction unobserved.
-    if (l.translation_points < r.degeneracy_threshold) ++p.degenerate_alone;
+    if (l.translation_points < min_points_) ++p.degenerate_alone;
   }
   if (!r.registered) {
     in_spell_ = false;
@@ -55,10 +55,10 @@ void DegeneracyTally::add(const estimator::SweepResult& r) {
   }
 }
 
-Json DegeneracyTally::toJson(Stamp begin_ns, double min_points, bool remap) const {
+Json DegeneracyTally::toJson(Stamp begin_ns) const {
   Json j = Json::object();
-  j["min_points"] = min_points;
-  j["remap_to_imu"] = remap;
+  j["min_points"] = min_points_;
+  j["remap_to_imu"] = remap_;
   j["registered_sweeps"] = registered_;
   j["degenerate_sweeps"] = degenerate_;
   j["translation_degenerate"] = translation_;

@@ -48,7 +48,7 @@ RunResult runBag(const RunOptions& options) {
   RunResult result;
   std::map<std::string, LidarTally> tally;
   std::size_t tracked = 0, degraded = 0, initialising = 0;
-  DegeneracyTally degeneracy;
+  DegeneracyTally degeneracy(cfg.odometry.degenerate_min_points, cfg.odometry.remap_degenerate);
   auto onSweep = [&](const estimator::SweepResult& r) {
     if (r.status == estimator::SweepResult::Status::kInitializing) {
       ++initialising;
@@ -169,7 +169,7 @@ RunResult runBag(const RunOptions& options) {
   sw["keyframes"] = odometry.keyframes();
   sw["degenerate"] = degeneracy.degenerateSweeps();
   rep["sweeps"] = sw;
-  rep["degeneracy"] = degeneracy.toJson(source.beginNs(), cfg.odometry.degenerate_min_points, cfg.odometry.remap_degenerate);
+  rep["degeneracy"] = degeneracy.toJson(source.beginNs());
 
   Json per_lidar = Json::object();
   for (const auto& [name, t] : tally) {

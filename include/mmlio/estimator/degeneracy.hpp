@@ -39,7 +39,6 @@ struct Degeneracy {
   double translation_points = 0.0;                             // weakest translation eigenvalue
   double rotation_points = 0.0;                                // weakest rotation eigenvalue
   Eigen::Vector3d weak_translation = Eigen::Vector3d::UnitX();  // its direction (world frame)
-  Eigen::Vector3d weak_rotation = Eigen::Vector3d::UnitZ();     // its axis (body frame)
   Eigen::Matrix3d translation_basis = Eigen::Matrix3d::Identity();  // eigenvectors, ascending
   Eigen::Vector3d translation_eigenvalues = Eigen::Vector3d::Zero();
   Eigen::Matrix3d rotation_basis = Eigen::Matrix3d::Identity();

@@ -71,9 +71,8 @@ struct LidarFrameStats {
   bool bad_frame = false;
   int counted_edges = 0;  // solid state: edges beyond the bad-frame range
   // This LiDAR's own map matches (registered sweeps only): weakest translation direction in
-  // effective points (-1: not registered), and the body axis it is nearest to.
+  // effective points (-1: not registered).
   double translation_points = -1.0;
-  const char* weak_axis = "";
 };
 
 struct SweepResult {
@@ -86,7 +85,6 @@ struct SweepResult {
   Degeneracy degeneracy;                // of the scan-to-map registration (valid when registered)
   bool registered = false;              // matched against the map (not the first sweep, not degraded)
   int remapped_directions = 0;          // directions where the IMU prediction was kept
-  double degeneracy_threshold = 0.0;    // the translation threshold it was judged by, effective points
   std::vector<Point> points_body;       // de-skewed points in the body frame at the window end
   std::string note;                     // why degraded
   StageTimes times_ms;

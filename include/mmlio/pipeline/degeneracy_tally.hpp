@@ -13,10 +13,12 @@ namespace mmlio::pipeline {
 
 class DegeneracyTally {
  public:
+  /// min_points / remap: the odometry's odometry.degenerate_min_points and remap_degenerate.
+  DegeneracyTally(double min_points, bool remap) : min_points_(min_points), remap_(remap) {}
   void add(const estimator::SweepResult& r);
   std::size_t degenerateSweeps() const { return degenerate_; }
   /// report.json "degeneracy"; times in s since begin_ns.
-  Json toJson(Stamp begin_ns, double min_points, bool remap) const;
+  Json toJson(Stamp begin_ns) const;
 
  private:
   struct Spell {
@@ -28,6 +30,8 @@ class DegeneracyTally {
     std::size_t judged = 0, degenerate_alone = 0;
     std::vector<double> points;
   };
+  double min_points_;
+  bool remap_;
   std::size_t registered_ = 0, degenerate_ = 0, translation_ = 0, rotation_ = 0, remapped_ = 0;
   std::map<std::string, std::size_t> weak_axis_;
   std::vector<double> weakest_points_;
