@@ -31,6 +31,7 @@ struct SimulateArgs {
   sim::ImuNoiseConfig imu;
   double acc_bias_m_s2 = -1;
   bool random_mount = false;
+  int people = 0;
 };
 
 YAML::Node vec3(const Eigen::Vector3d& v) {
@@ -67,6 +68,7 @@ void writeTruth(const std::string& path, const sim::Simulator& sim, const Simula
   extra["random_mount"] = args.random_mount;
   extra["velodyne_phase_s"] = toSec(sim.velodyneTrueStartNs(0) - sim.startNs());
   extra["seed"] = args.seed;
+  extra["people"] = sim.crowd().size();
   extra["duration_s"] = sim.durationS();
   extra["path_length_m"] = sim.pathLengthM();
   extra["start_stamp_ns"] = sim.startNs();
@@ -84,6 +86,7 @@ void runSimulate(const SimulateArgs& args) {
   options.imu = args.imu;
   options.acc_bias_m_s2 = args.acc_bias_m_s2;
   options.random_mount = args.random_mount;
+  options.people = args.people;
   options.livox_pattern = args.pattern == "rosette" ? sim::SolidStatePattern::kRosette : sim::SolidStatePattern::kLissajous;
   options.livox_no_returns_as_zero = true;  // what livox_ros_driver publishes
   const sim::Simulator sim(options);  // throws for an unknown scenario
@@ -138,6 +141,8 @@ void runSimulate(const SimulateArgs& args) {
   std::snprintf(status, sizeof(status), "%d Livox frames, %d Velodyne sweeps, %zu IMU samples, %.1f M points in %.1f s",
                 num_livox, num_velodyne, imu.size(), num_points * 1e-6, watch.elapsedMs() * 1e-3);
   progress.finish(status);
+  if (sim.crowd().size() < args.people)
+    log::warn("only ", sim.crowd().size(), " of ", args.people, " people found room to walk in ", args.scenario);
   log::info("simulated ", args.scenario, ": ", sim.durationS(), " s, path ", sim.pathLengthM(), " m -> ", base,
             ".bag, ", base, "_gt.tum, ", base, "_truth.yaml");
 }
@@ -172,6 +177,10 @@ void registerSimulateCommand(CLI::App& app) {
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_flag("--random-mount", args->random_mount,
                 "Draw both LiDAR extrinsics and the Velodyne sweep phase from the seed (written to NAME_truth.yaml)");
+  cmd->add_option("--people", args->people,
+                  "People walking through the scene (person-sized boxes at 0.8-1.5 m/s along and across the rig's "
+                  "route; paths from the seed)")
+      ->check(CLI::Range(0, 64));
   cmd->callback([args] { runSimulate(*args); });
 }
 

@@ -87,10 +87,19 @@ void bind(YamlBinder& b, LoopConfig& c) {
   b.field("min_overlap", c.min_overlap, "accept a loop when the inlier fraction is above this, 0..1");
 }
 
+void bind(YamlBinder& b, DynamicObjectsConfig& c) {
+  b.field("enabled", c.enabled,
+          "returns in space an earlier sweep saw through (people, doors) are rejected before registration "
+          "and kept out of the local map; local map points a keyframe sees through are removed");
+  b.field("clean_map", c.clean_map,
+          "remove from map.pcd the points keyframes saw through more often than they saw them (ghosts)");
+}
+
 void bind(YamlBinder& b, OutputConfig& c) {
   b.field("map_voxel_m", c.map_voxel_m, "voxel size of the written map.pcd, m; 0 keeps every point");
   b.field("per_lidar_maps", c.per_lidar_maps, "also write one map_<lidar>.pcd per LiDAR");
   b.field("write_kitti", c.write_kitti, "also write the trajectory in KITTI format (poses + times.txt)");
+  b.field("dynamic_map", c.dynamic_map, "also write map_dynamic.pcd: the points removed as moving objects");
 }
 
 void bind(YamlBinder& b, RigConfig& c) {
@@ -108,6 +117,8 @@ void bind(YamlBinder& b, RigConfig& c) {
   b.section("odometry", c.odometry, [](YamlBinder& s, OdometryConfig& v) { bind(s, v); },
             "sliding-window odometry");
   b.section("loop", c.loop, [](YamlBinder& s, LoopConfig& v) { bind(s, v); }, "loop closure");
+  b.section("dynamic", c.dynamic, [](YamlBinder& s, DynamicObjectsConfig& v) { bind(s, v); },
+            "moving objects (people): rejection in the odometry, ghost removal in the map");
   b.section("output", c.output, [](YamlBinder& s, OutputConfig& v) { bind(s, v); }, "outputs");
 }
 

@@ -1,5 +1,7 @@
 #include "mmlio/map/voxel_hash_map.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -54,6 +56,42 @@ void VoxelHashMap::removeFarFrom(const Eigen::Vector3d& center, double radius_m)
   }
   std::fill(occupancy_.begin(), occupancy_.end(), 0);
   for (const auto& [key, bucket] : voxels_) markOccupied(key);
+}
+
+std::size_t VoxelHashMap::removeIf(const Eigen::Vector3d& center, double radius_m,
+                                  const std::function<bool(const Eigen::Vector3d&)>& remove) {
+  const double reach = radius_m + std::sqrt(3.0) * voxel_m_;
+  std::vector<std::vector<Eigen::Vector3d>*> near;
+  for (auto& [key, bucket] : voxels_)
+    if (!bucket.empty() && (bucket.front() - center).squaredNorm() <= reach * reach) near.push_back(&bucket);
+  std::vector<std::size_t> removed(near.size(), 0);
+  const double r2 = radius_m * radius_m;
+  tbb::parallel_for(std::size_t(0), near.size(), [&](std::size_t i) {
+    auto& bucket = *near[i];
+    const auto end = std::remove_if(bucket.begin(), bucket.end(), [&](const Eigen::Vector3d& p) {
+      return (p - center).squaredNorm() <= r2 && remove(p);
+    });
+    removed[i] = static_cast<std::size_t>(bucket.end() - end);
+    bucket.erase(end, bucket.end());
+  });
+  std::size_t total = 0;
+  for (std::size_t n : removed) total += n;
+  if (total == 0) return 0;
+  num_points_ -= total;
+  bool erased = false;
+  for (auto it = voxels_.begin(); it != voxels_.end();) {
+    if (it->second.empty()) {
+      it = voxels_.erase(it);
+      erased = true;
+    } else {
+      ++it;
+    }
+  }
+  if (erased) {
+    std::fill(occupancy_.begin(), occupancy_.end(), 0);
+    for (const auto& [key, bucket] : voxels_) markOccupied(key);
+  }
+  return total;
 }
 
 int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,

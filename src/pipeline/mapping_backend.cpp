@@ -1,14 +1,17 @@
 #include "mmlio/pipeline/mapping_backend.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 
 #include "mmlio/backend/point_to_plane_icp.hpp"
 #include "mmlio/core/log.hpp"
 
 namespace mmlio::pipeline {
 
-MappingBackend::MappingBackend(Config cfg) : cfg_(std::move(cfg)) {
+MappingBackend::MappingBackend(Config cfg) : cfg_(std::move(cfg)), dynamic_(cfg_.map_leaf_m) {
   if (cfg_.loop_enabled) closer_ = std::make_unique<backend::LoopCloser>(cfg_.loop);
 }
 
@@ -80,12 +83,14 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
       node.cloud_body = backend::voxelCentroids(pts, cfg_.loop_cloud_voxel_m);
     }
     const int k = graph_.addKeyframe(std::move(node));
+    views_.push_back(cfg_.clean_map ? sweep.view : nullptr);
     closeSubmap();
     submaps_.emplace_back();
     T_world_keyframe_ = T_world_body;
 
     if (closer_ && k > 0 && k % std::max(1, cfg_.loop_check_every) == 0) tryLoop(k);
   }
+  if (cfg_.dynamic_map && !sweep.points_dynamic_body.empty()) dynamic_.add(sweep.points_dynamic_body, T_world_body);
   // Points go into the current keyframe's submap, in that keyframe's frame. The odometry lists
   // points_body LiDAR by LiDAR, in the order of sweep.lidars.
   const std::size_t stride = static_cast<std::size_t>(std::max(1, cfg_.map_point_stride));
@@ -161,7 +166,70 @@ std::vector<Point> MappingBackend::mergedMap(const std::string* only_lidar) cons
   return merged.points();
 }
 
-std::vector<Point> MappingBackend::map() const { return mergedMap(nullptr); }
+std::vector<Point> MappingBackend::map(std::vector<Point>* removed, GhostRemoval* stats) const {
+  std::vector<Point> points = mergedMap(nullptr);
+  if (!cfg_.clean_map) return points;
+  return removeGhosts(std::move(points), removed, stats);
+}
+
+std::vector<Point> MappingBackend::dynamicMap() const { return dynamic_.points(); }
+
+std::vector<Point> MappingBackend::removeGhosts(std::vector<Point> points, std::vector<Point>* removed,
+                                                GhostRemoval* stats) const {
+  // One vote per keyframe (its LiDARs together): seen through by any of them, else seen on.
+  struct Eye {
+    const map::RangeImage* image;
+    Eigen::Isometry3d T_sensor_world;
+    Eigen::Vector3d origin;
+    std::size_t keyframe;
+  };
+  std::vector<Eye> eyes;
+  for (std::size_t k = 0; k < views_.size() && k < graph_.size(); ++k) {
+    if (!views_[k]) continue;
+    const Eigen::Isometry3d T_world_body = graph_.pose(static_cast<int>(k));
+    for (const estimator::SensorView& s : views_[k]->sensors) {
+      const Eigen::Isometry3d T_world_sensor = T_world_body * s.T_body_sensor;
+      eyes.push_back({&s.image, T_world_sensor.inverse(), T_world_sensor.translation(), k});
+    }
+  }
+  std::vector<std::uint8_t> ghost(points.size(), 0), judged(points.size(), 0);
+  const double r2 = cfg_.ghost_range_m * cfg_.ghost_range_m;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      const Eigen::Vector3d p = points[i].xyz.cast<double>();
+      int free = 0, hit = 0;
+      for (std::size_t e = 0; e < eyes.size();) {
+        bool view_free = false, view_hit = false;
+        const std::size_t k = eyes[e].keyframe;
+        for (; e < eyes.size() && eyes[e].keyframe == k; ++e) {
+          if ((p - eyes[e].origin).squaredNorm() > r2) continue;
+          const map::Visibility v = eyes[e].image->classify(eyes[e].T_sensor_world * p);
+          view_free = view_free || v == map::Visibility::kFree;
+          view_hit = view_hit || v == map::Visibility::kHit;
+        }
+        free += view_free;
+        hit += view_hit && !view_free;
+      }
+      judged[i] = free + hit > 0;
+      // The keyframe that stored a point saw it: a ghost has one hit of its own.
+      ghost[i] = free >= 2 && free > hit;
+    }
+  });
+  std::size_t kept = 0;
+  GhostRemoval g;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    g.judged_points += judged[i];
+    if (ghost[i]) {
+      if (removed) removed->push_back(points[i]);
+      continue;
+    }
+    points[kept++] = points[i];
+  }
+  g.removed_points = points.size() - kept;
+  points.resize(kept);
+  if (stats) *stats = g;
+  return points;
+}
 
 std::vector<Point> MappingBackend::lidarMap(const std::string& lidar) const { return mergedMap(&lidar); }
 

@@ -38,6 +38,7 @@ estimator::OdometryConfig odometryConfig(const io::RigConfig& cfg) {
   o.degeneracy.min_rotation_points = od.degenerate_min_points;
   o.remap_degenerate = od.remap_degenerate;
   o.huber_loss_m = od.huber_loss_m;
+  o.dynamic.enabled = cfg.dynamic.enabled;
   return o;
 }
 
@@ -64,6 +65,8 @@ MappingBackend::Config mappingBackendConfig(const io::RigConfig& cfg) {
   mb.loop.min_translation_eigenvalue = 0.08;
   mb.map_leaf_m = cfg.output.map_voxel_m;
   mb.per_lidar_maps = cfg.output.per_lidar_maps;
+  mb.clean_map = cfg.dynamic.clean_map;
+  mb.dynamic_map = cfg.output.dynamic_map;
   return mb;
 }
 

@@ -48,6 +48,7 @@ RunResult runBag(const RunOptions& options) {
   RunResult result;
   std::map<std::string, LidarTally> tally;
   std::size_t tracked = 0, degraded = 0, initialising = 0;
+  std::size_t dynamic_points = 0, dynamic_sweeps = 0, carved_points = 0;
   DegeneracyTally degeneracy(cfg.odometry.degenerate_min_points, cfg.odometry.remap_degenerate);
   auto onSweep = [&](const estimator::SweepResult& r) {
     if (r.status == estimator::SweepResult::Status::kInitializing) {
@@ -59,6 +60,9 @@ RunResult runBag(const RunOptions& options) {
     Stopwatch t;
     result.trajectory.push_back({r.state.stamp_ns, r.state.pose()});
     degeneracy.add(r);
+    dynamic_points += r.dynamic_points;
+    dynamic_sweeps += r.dynamic_points > 0;
+    carved_points += r.carved_points;
     mapping.addSweep(r);
     StageTimes times = r.times_ms;
     times.emplace_back("mapping_backend", t.lapMs());
@@ -196,8 +200,20 @@ RunResult runBag(const RunOptions& options) {
 
   // ---- outputs ----
   result.trajectory = mapping.correctedTrajectory();
-  const std::vector<Point> map_points = mapping.map();
+  std::vector<Point> dynamic_map = mapping.dynamicMap();
+  MappingBackend::GhostRemoval ghosts;
+  const std::vector<Point> map_points = mapping.map(&dynamic_map, &ghosts);
   result.map_points = map_points.size();
+  Json dyn = Json::object();
+  dyn["enabled"] = cfg.dynamic.enabled;
+  dyn["feature_points_rejected"] = dynamic_points;
+  dyn["sweeps_with_rejections"] = dynamic_sweeps;
+  dyn["local_map_points_carved"] = carved_points;
+  dyn["clean_map"] = cfg.dynamic.clean_map;
+  dyn["map_points_judged"] = ghosts.judged_points;
+  dyn["map_points_removed"] = ghosts.removed_points;
+  dyn["dynamic_map_points"] = dynamic_map.size();
+  rep["dynamic"] = dyn;
   if (!options.out_dir.empty()) {
     namespace fs = std::filesystem;
     fs::create_directories(options.out_dir);
@@ -222,6 +238,10 @@ RunResult runBag(const RunOptions& options) {
       per_lidar_maps[lidar] = path;
     }
     if (!mapping.lidarNames().empty()) out["per_lidar_maps"] = per_lidar_maps;
+    if (cfg.output.dynamic_map) {
+      io::writePcdBinary(dir + "map_dynamic.pcd", dynamic_map);
+      out["dynamic_map"] = dir + "map_dynamic.pcd";
+    }
     rep["outputs"] = out;
     writeReports(dir, rep, result.trajectory, map_points, options.gt_path);
   }

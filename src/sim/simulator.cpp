@@ -69,11 +69,15 @@ Simulator::Simulator(SimOptions options) : options_(std::move(options)) {
   }
   // Path length by fine sampling of the position.
   Eigen::Vector3d prev = motion_.at(0).p_world;
+  std::vector<Eigen::Vector2d> route{prev.head<2>()};
   for (double t = 0.01; t <= durationS() + 1e-9; t += 0.01) {
     const Eigen::Vector3d p = motion_.at(t).p_world;
     path_length_m_ += (p - prev).norm();
     prev = p;
+    route.push_back(p.head<2>());
   }
+  if (options_.people < 0) throw Error("the number of people must be >= 0");
+  crowd_ = Crowd(scene_, route, options_.people, options_.seed);
 }
 
 NavState Simulator::trueState(Stamp stamp_ns) const {
@@ -150,40 +154,55 @@ LidarExtrinsic Simulator::livoxExtrinsic() const {
   return e;
 }
 
-LidarScan Simulator::velodyneSweep(int k) const {
+LidarScan Simulator::velodyneSweep(int k, std::vector<std::uint8_t>* on_person) const {
   if (k < 0 || k >= numVelodyneSweeps()) throw Error("velodyne sweep index " + std::to_string(k) + " out of range");
   LidarScan scan = cast(velodyne_beams_, velodyneTrueStartNs(k), velodyneExtrinsic().T_imu_sensor,
-                        velodyne_.range_noise_m, velodyne_.min_range_m, velodyne_.max_range_m, kVelodyneId, k, false);
+                        velodyne_.range_noise_m, velodyne_.min_range_m, velodyne_.max_range_m, kVelodyneId, k, false,
+                        on_person);
   scan.sensor = "velodyne";
   scan.start_ns -= fromSec(options_.velodyne_time_offset_s);
   return scan;
 }
 
-LidarScan Simulator::livoxFrame(int k) const {
+LidarScan Simulator::livoxFrame(int k, std::vector<std::uint8_t>* on_person) const {
   if (k < 0 || k >= numLivoxFrames()) throw Error("livox frame index " + std::to_string(k) + " out of range");
   LidarScan scan = cast(livoxBeams(livox_, k), kSimStartNs + k * kFramePeriodNs, livoxExtrinsic().T_imu_sensor,
                         livox_.range_noise_m, livox_.min_range_m, livox_.max_range_m, kLivoxId, k,
-                        options_.livox_no_returns_as_zero);
+                        options_.livox_no_returns_as_zero, on_person);
   scan.sensor = "livox";
   return scan;
 }
 
 LidarScan Simulator::cast(const std::vector<Beam>& beams, Stamp true_start_ns, const Eigen::Isometry3d& T_imu_sensor,
                           double range_noise_m, double min_range_m, double max_range_m, std::uint64_t sensor_id,
-                          int k, bool keep_no_returns) const {
+                          int k, bool keep_no_returns, std::vector<std::uint8_t>* on_person) const {
   std::vector<Point> points(beams.size());
   std::vector<char> valid(beams.size(), 0);
+  std::vector<std::uint8_t> person(beams.size(), 0);
   const double t_start = toSec(true_start_ns - kSimStartNs);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, beams.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) {
       const Beam& b = beams[i];
       const Eigen::Isometry3d T_world_sensor = motion_.at(t_start + b.time_s).pose() * T_imu_sensor;
       const Eigen::Vector3d d = T_world_sensor.linear() * b.dir.cast<double>();
-      const RayHit hit = scene_.cast(T_world_sensor.translation(), d, max_range_m);
+      RayHit hit = scene_.cast(T_world_sensor.translation(), d, max_range_m);
+      const Box* surface = hit.box < 0 ? nullptr : &scene_.boxes()[hit.box];
+      Box person_box;
+      if (!crowd_.empty()) {
+        const double t = t_start + b.time_s;
+        const RayHit p = crowd_.cast(T_world_sensor.translation(), d, std::min(hit.range_m, max_range_m), t);
+        if (p.box >= 0 && p.range_m < hit.range_m) {
+          hit = p;
+          person_box = crowd_.boxAt(p.box, t);
+          surface = &person_box;
+          person[i] = 1;
+        }
+      }
       const double range = hit.box < 0 ? 0.0
                                        : hit.range_m + range_noise_m * normalFromKey(hashKey(options_.seed, sensor_id,
                                                                                              static_cast<std::uint64_t>(k), i));
       if (hit.box < 0 || range < min_range_m || range > max_range_m) {
+        person[i] = 0;
         if (keep_no_returns) {  // the driver's no-return point: (0,0,0) with its time
           points[i].xyz.setZero();
           points[i].time_s = b.time_s;
@@ -196,7 +215,7 @@ LidarScan Simulator::cast(const std::vector<Beam>& beams, Stamp true_start_ns, c
       const double cos_incidence = std::abs(d[hit.axis]);
       Point& p = points[i];
       p.xyz = (b.dir.cast<double>() * range).cast<float>();
-      p.intensity = std::round(scene_.boxes()[hit.box].reflectivity * static_cast<float>(0.5 + 0.5 * cos_incidence));
+      p.intensity = std::round(surface->reflectivity * static_cast<float>(0.5 + 0.5 * cos_incidence));
       p.time_s = b.time_s;
       p.ring = b.ring;
       valid[i] = 1;
@@ -205,8 +224,12 @@ LidarScan Simulator::cast(const std::vector<Beam>& beams, Stamp true_start_ns, c
   LidarScan scan;
   scan.start_ns = true_start_ns;
   scan.points.reserve(beams.size());
-  for (size_t i = 0; i < beams.size(); ++i)
-    if (valid[i]) scan.points.push_back(points[i]);
+  if (on_person) on_person->clear();
+  for (size_t i = 0; i < beams.size(); ++i) {
+    if (!valid[i]) continue;
+    scan.points.push_back(points[i]);
+    if (on_person) on_person->push_back(person[i]);
+  }
   return scan;
 }
 

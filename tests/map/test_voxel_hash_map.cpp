@@ -75,3 +75,23 @@ TEST(VoxelHashMap, RemoveFarFromKeepsOnlyPointsNearTheCentre) {
   map.clear();
   EXPECT_TRUE(map.empty());
 }
+
+namespace mmlio::map {
+
+TEST(VoxelHashMap, RemoveIfDropsOnlyThePointsWithinTheRadiusThatThePredicateNames) {
+  VoxelHashMap m(0.5, 20);
+  std::vector<Eigen::Vector3d> pts;
+  for (int i = -40; i <= 40; ++i) pts.emplace_back(0.1 * i, 0.0, 0.0);  // a line from -4 to 4 m
+  m.add(pts);
+  const std::size_t removed =
+      m.removeIf(Eigen::Vector3d::Zero(), 2.0, [](const Eigen::Vector3d& p) { return p.x() > 0.05; });
+  EXPECT_EQ(removed, 20u);  // x = 0.1 .. 2.0
+  EXPECT_EQ(m.size(), pts.size() - 20);
+  std::vector<Eigen::Vector3d> nn;
+  ASSERT_EQ(m.knn(Eigen::Vector3d(1.0, 0, 0), 1, 5.0, &nn), 1);
+  EXPECT_NEAR(nn[0].x(), 0.0, 1e-9);  // the nearest left is the origin ...
+  ASSERT_EQ(m.knn(Eigen::Vector3d(2.3, 0, 0), 1, 5.0, &nn), 1);
+  EXPECT_NEAR(nn[0].x(), 2.3, 1e-9);  // ... and beyond the radius nothing moved
+}
+
+}  // namespace mmlio::map

@@ -17,6 +17,7 @@
 #include "mmlio/core/timer.hpp"
 #include "mmlio/core/types.hpp"
 #include "mmlio/estimator/degeneracy.hpp"
+#include "mmlio/estimator/free_space.hpp"
 #include "mmlio/imu/imu_noise.hpp"
 #include "mmlio/imu/initializer.hpp"
 #include "mmlio/lidar/bad_frame.hpp"
@@ -57,6 +58,7 @@ struct OdometryConfig {
   bool keep_points = true;              // return de-skewed points for the map
   DegeneracyConfig degeneracy;          // when a sweep's LiDAR information is too weak in a direction
   bool remap_degenerate = true;         // keep the IMU prediction along the directions found degenerate
+  DynamicConfig dynamic;                // returns on moving objects: rejected, and carved from the local map
 };
 
 /// One LiDAR of the rig as the estimator sees it.
@@ -86,6 +88,10 @@ struct SweepResult {
   bool registered = false;              // matched against the map (not the first sweep, not degraded)
   int remapped_directions = 0;          // directions where the IMU prediction was kept
   std::vector<Point> points_body;       // de-skewed points in the body frame at the window end
+  std::vector<Point> points_dynamic_body;  // ... those on things that moved in (left out of points_body)
+  std::size_t dynamic_points = 0;       // feature points rejected as moved in (registration, window, map)
+  std::size_t carved_points = 0;        // local map points this sweep saw through (keyframes)
+  std::shared_ptr<const SweepView> view;  // what each LiDAR saw, placed at the final state (dynamic.enabled)
   std::string note;                     // why degraded
   StageTimes times_ms;
 };

@@ -78,10 +78,16 @@ struct LoopConfig {
   double min_overlap = 0.5;        // accept: inlier fraction above this (0..1)
 };
 
+struct DynamicObjectsConfig {
+  bool enabled = true;             // returns on moving objects leave the odometry and its local map
+  bool clean_map = true;           // map.pcd: points later sweeps saw through are removed (ghosts)
+};
+
 struct OutputConfig {
   double map_voxel_m = 0.05;       // map.pcd downsampling; 0 = keep every point
   bool per_lidar_maps = false;     // also write map_<lidar>.pcd
   bool write_kitti = false;        // also write trajectory.kitti + times.txt
+  bool dynamic_map = true;         // also write map_dynamic.pcd: what was removed as moving
 };
 
 /// The two LiDARs of the reference rig (Velodyne VLP-16 + Livox Horizon with its built-in IMU).
@@ -97,6 +103,7 @@ struct RigConfig {
   BadFrameConfig bad_frame;
   OdometryConfig odometry;
   LoopConfig loop;
+  DynamicObjectsConfig dynamic;
   OutputConfig output;
   std::string source_path;                 // file it was loaded from (not a YAML key)
 };

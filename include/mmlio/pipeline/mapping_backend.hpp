@@ -35,6 +35,15 @@ class MappingBackend {
                                          // surface, not the time spent in it
     double revisit_new_fraction = 0.1;   // a closed keyframe with fewer new voxels than this
                                          // fraction frees its loop cloud (a revisit)
+    bool clean_map = true;               // map(): drop points keyframes saw through (ghosts of movers)
+    bool dynamic_map = true;             // keep what the odometry rejected as moving (dynamicMap)
+    double ghost_range_m = 25.0;         // keyframes judge map points up to this far from a LiDAR
+  };
+
+  /// What the ghost removal of map() did.
+  struct GhostRemoval {
+    std::size_t judged_points = 0;       // map points at least one keyframe view could judge
+    std::size_t removed_points = 0;
   };
 
   explicit MappingBackend(Config cfg);
@@ -47,7 +56,12 @@ class MappingBackend {
   void finish();
 
   Trajectory correctedTrajectory() const;
-  std::vector<Point> map() const;
+  /// The map at the corrected poses. With clean_map, without the points keyframes saw through at
+  /// least twice and more often than they saw them (something stood there and left); those go to
+  /// *removed. A surface seen once is never removed: only rays that pass it can.
+  std::vector<Point> map(std::vector<Point>* removed = nullptr, GhostRemoval* stats = nullptr) const;
+  /// Points the odometry rejected as moving, at the odometry poses (dynamic_map).
+  std::vector<Point> dynamicMap() const;
   /// With per_lidar_maps: the names of the LiDARs seen, and one LiDAR's map (empty if unknown).
   std::vector<std::string> lidarNames() const;
   std::vector<Point> lidarMap(const std::string& lidar) const;
@@ -72,6 +86,9 @@ class MappingBackend {
   std::map<std::string, std::unordered_set<std::uint64_t>> covered_;  // world voxels held, per LiDAR key
   void closeSubmap();
   std::vector<Point> mergedMap(const std::string* only_lidar) const;
+  std::vector<Point> removeGhosts(std::vector<Point> points, std::vector<Point>* removed, GhostRemoval* stats) const;
+  std::vector<std::shared_ptr<const estimator::SweepView>> views_;  // per keyframe (may be null)
+  MapAccumulator dynamic_{0.05};
   Trajectory odometry_;
   Eigen::Isometry3d T_world_keyframe_ = Eigen::Isometry3d::Identity();
   std::size_t loop_attempts_ = 0;

@@ -23,6 +23,7 @@
 #include "mmlio/core/types.hpp"
 #include "mmlio/sim/lidar_patterns.hpp"
 #include "mmlio/sim/motion.hpp"
+#include "mmlio/sim/people.hpp"
 #include "mmlio/sim/scenarios.hpp"
 #include "mmlio/sim/scene.hpp"
 
@@ -52,6 +53,7 @@ struct SimOptions {
   SolidStatePattern livox_pattern = SolidStatePattern::kLissajous;
   bool random_mount = false;            // both extrinsics and the Velodyne sweep phase drawn from the seed
   bool livox_no_returns_as_zero = false;  // beams without a return become (0,0,0) points, as the Livox driver does
+  int people = 0;                       // people walking through the scene (see people.hpp), paths from the seed
 };
 
 class Simulator {
@@ -77,13 +79,14 @@ class Simulator {
   ImuBias initialBias() const { return imu_noise_.initial_bias; }
 
   int numVelodyneSweeps() const;
-  /// Sweep k, sensor "velodyne", start_ns = true start - velodyne_time_offset_s.
-  LidarScan velodyneSweep(int k) const;
+  /// Sweep k, sensor "velodyne", start_ns = true start - velodyne_time_offset_s. With on_person,
+  /// one flag per returned point: 1 where the return hit a person (the ground truth of what moves).
+  LidarScan velodyneSweep(int k, std::vector<std::uint8_t>* on_person = nullptr) const;
   /// True start time of Velodyne sweep k.
   Stamp velodyneTrueStartNs(int k) const { return kSimStartNs + velodyne_phase_ns_ + k * 100000000LL; }
   int numLivoxFrames() const;
-  /// Frame k, sensor "livox".
-  LidarScan livoxFrame(int k) const;
+  /// Frame k, sensor "livox" (on_person as for velodyneSweep).
+  LidarScan livoxFrame(int k, std::vector<std::uint8_t>* on_person = nullptr) const;
 
   LidarExtrinsic velodyneExtrinsic() const;
   LidarExtrinsic livoxExtrinsic() const;
@@ -91,17 +94,19 @@ class Simulator {
   const LivoxConfig& livoxConfig() const { return livox_; }
 
   double pathLengthM() const { return path_length_m_; }
+  const Crowd& crowd() const { return crowd_; }
 
  private:
   LidarScan cast(const std::vector<Beam>& beams, Stamp true_start_ns, const Eigen::Isometry3d& T_imu_sensor,
                  double range_noise_m, double min_range_m, double max_range_m, std::uint64_t sensor_id, int k,
-                 bool keep_no_returns) const;
+                 bool keep_no_returns, std::vector<std::uint8_t>* on_person) const;
   void drawMount();
 
   SimOptions options_;
   Scenario scenario_;
   Scene scene_;
   SplineMotion motion_;
+  Crowd crowd_;
   ImuNoiseConfig imu_noise_;
   VelodyneConfig velodyne_;
   LivoxConfig livox_;

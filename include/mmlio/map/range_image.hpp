@@ -1,0 +1,51 @@
+#pragma once
+// What one LiDAR saw from one place: the nearest return per (azimuth, elevation) pixel. It answers
+// the visibility question behind dynamic-object handling: was a point in space seen THROUGH (the
+// rays around it went farther: free space), seen ON (a return at its range), or hidden behind
+// something nearer?
+//
+// "Free" is deliberately hard to get, because wrongly calling a static surface free removes it:
+// every measured pixel in a window around the point must be farther than the point by a margin,
+// and the measured pixels must surround the point in both azimuth and elevation. So a point
+// beside a depth edge, between a spinning LiDAR's rings with no ring beyond it, at the edge of a
+// solid-state field of view, or on a surface at grazing incidence is never free.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "mmlio/core/types.hpp"
+
+namespace mmlio::map {
+
+struct RangeImageConfig {
+  double resolution_deg = 0.5;  // pixel size in azimuth and elevation
+  int window_cols = 1;          // half-window in azimuth, pixels
+  int window_rows = 4;          // half-window in elevation, pixels (spans a VLP-16's 2 deg ring gap)
+  double margin_m = 0.1;        // free: every ray nearby went at least this much farther ...
+  double margin_fraction = 0.02;  // ... plus this fraction of the point's range (range noise, pose error)
+  double min_range_m = 0.5;     // nearer points are never judged (self returns, blind zone)
+};
+
+enum class Visibility : std::uint8_t { kUnknown, kFree, kHit, kOccluded };
+
+class RangeImage {
+ public:
+  RangeImage() = default;
+  /// From points in the sensor frame; (0,0,0) no-return points and non-finite ones are skipped.
+  RangeImage(const std::vector<Point>& points_sensor, const RangeImageConfig& config);
+
+  Visibility classify(const Eigen::Vector3d& p_sensor) const;
+  bool empty() const { return ranges_.empty(); }
+  std::size_t memoryBytes() const { return ranges_.size() * sizeof(float); }
+
+ private:
+  bool pixelOf(const Eigen::Vector3d& p, int* col, int* row) const;  // row relative to row0_, may lie outside
+
+  RangeImageConfig cfg_;
+  double inv_res_ = 1.0;
+  int cols_ = 0, rows_ = 0, row0_ = 0;
+  std::vector<float> ranges_;  // rows_ x cols_, 0 = no return
+};
+
+}  // namespace mmlio::map

@@ -1,0 +1,57 @@
+#include "mmlio/estimator/free_space.hpp"
+
+#include <tbb/parallel_for.h>
+
+namespace mmlio::estimator {
+
+void SweepView::place(const Eigen::Isometry3d& T_world_body) {
+  for (SensorView& s : sensors) s.T_world_sensor = T_world_body * s.T_body_sensor;
+}
+
+bool SweepView::seesThrough(const Eigen::Vector3d& p_world) const {
+  for (const SensorView& s : sensors)
+    if (s.image.classify(s.T_world_sensor.inverse() * p_world) == map::Visibility::kFree) return true;
+  return false;
+}
+
+void SweepView::count(const Eigen::Vector3d& p_world, int* free, int* hit) const {
+  for (const SensorView& s : sensors) {
+    const map::Visibility v = s.image.classify(s.T_world_sensor.inverse() * p_world);
+    *free += v == map::Visibility::kFree;
+    *hit += v == map::Visibility::kHit;
+  }
+}
+
+std::size_t SweepView::memoryBytes() const {
+  std::size_t n = sizeof(*this);
+  for (const SensorView& s : sensors) n += sizeof(s) + s.image.memoryBytes();
+  return n;
+}
+
+void FreeSpaceMemory::remember(std::shared_ptr<const SweepView> view) {
+  views_.push_back(std::move(view));
+  while (views_.size() > 1 && toSec(views_.back()->stamp_ns - views_.front()->stamp_ns) > cfg_.look_back_max_s + 0.2)
+    views_.pop_front();
+}
+
+std::vector<std::uint8_t> FreeSpaceMemory::movedIn(const std::vector<Eigen::Vector3d>& points, Stamp now) const {
+  std::vector<std::uint8_t> flags(points.size(), 0);
+  std::vector<const SweepView*> asked;
+  for (const auto& v : views_) {  // oldest first
+    const double age = toSec(now - v->stamp_ns);
+    if (age >= cfg_.look_back_min_s && age <= cfg_.look_back_max_s) asked.push_back(v.get());
+  }
+  if (asked.size() > 2) asked = {asked.front(), asked.back()};
+  if (asked.empty()) return flags;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i)
+      for (const SweepView* v : asked)
+        if (v->seesThrough(points[i])) {
+          flags[i] = 1;
+          break;
+        }
+  });
+  return flags;
+}
+
+}  // namespace mmlio::estimator

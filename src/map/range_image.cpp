@@ -1,0 +1,84 @@
+#include "mmlio/map/range_image.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace mmlio::map {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+int rowOf(double elevation_rad, double inv_res) { return static_cast<int>(std::floor((elevation_rad * kRadToDeg + 90.0) * inv_res)); }
+
+}  // namespace
+
+RangeImage::RangeImage(const std::vector<Point>& points, const RangeImageConfig& config) : cfg_(config) {
+  inv_res_ = 1.0 / std::max(0.05, cfg_.resolution_deg);
+  cols_ = std::max(1, static_cast<int>(std::ceil(360.0 * inv_res_)));
+  int lo = std::numeric_limits<int>::max(), hi = std::numeric_limits<int>::min();
+  for (const Point& p : points) {
+    const Eigen::Vector3d v = p.xyz.cast<double>();
+    const double r = v.norm();
+    if (!(r > 1e-3) || !std::isfinite(r)) continue;
+    const int row = rowOf(std::asin(std::clamp(v.z() / r, -1.0, 1.0)), inv_res_);
+    lo = std::min(lo, row);
+    hi = std::max(hi, row);
+  }
+  if (lo > hi) return;
+  row0_ = lo;
+  rows_ = hi - lo + 1;
+  ranges_.assign(static_cast<std::size_t>(rows_) * static_cast<std::size_t>(cols_), 0.f);
+  for (const Point& p : points) {
+    int col, row;
+    const Eigen::Vector3d v = p.xyz.cast<double>();
+    if (!pixelOf(v, &col, &row) || row < 0 || row >= rows_) continue;
+    float& cell = ranges_[static_cast<std::size_t>(row) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(col)];
+    const auto r = static_cast<float>(v.norm());
+    if (cell == 0.f || r < cell) cell = r;
+  }
+}
+
+bool RangeImage::pixelOf(const Eigen::Vector3d& p, int* col, int* row) const {
+  const double r = p.norm();
+  if (!(r > 1e-3) || !std::isfinite(r)) return false;
+  *col = std::clamp(static_cast<int>(std::floor((std::atan2(p.y(), p.x()) * kRadToDeg + 180.0) * inv_res_)), 0, cols_ - 1);
+  *row = rowOf(std::asin(std::clamp(p.z() / r, -1.0, 1.0)), inv_res_) - row0_;
+  return true;
+}
+
+Visibility RangeImage::classify(const Eigen::Vector3d& p) const {
+  if (ranges_.empty()) return Visibility::kUnknown;
+  const double r = p.norm();
+  if (!(r >= cfg_.min_range_m)) return Visibility::kUnknown;
+  int col, row;  // a row just outside the image still sees measured rows through the window
+  pixelOf(p, &col, &row);
+  const double margin = cfg_.margin_m + cfg_.margin_fraction * r;
+  double nearest = std::numeric_limits<double>::infinity();
+  bool hit = false, below = false, above = false, left = false, right = false;
+  for (int dr = -cfg_.window_rows; dr <= cfg_.window_rows; ++dr) {
+    const int y = row + dr;
+    if (y < 0 || y >= rows_) continue;
+    const float* line = &ranges_[static_cast<std::size_t>(y) * static_cast<std::size_t>(cols_)];
+    for (int dc = -cfg_.window_cols; dc <= cfg_.window_cols; ++dc) {
+      const int x = (col + dc + cols_) % cols_;
+      const float m = line[x];
+      if (m == 0.f) continue;
+      nearest = std::min(nearest, static_cast<double>(m));
+      // Seen ON: a return at the point's range in its own pixel or the ones just above and below.
+      // The rest of the window does not count: at grazing incidence it reaches a wall or the floor
+      // at every range near the point's.
+      hit = hit || (dc == 0 && std::abs(dr) <= 1 && std::abs(m - r) <= margin);
+      below = below || dr <= 0;
+      above = above || dr >= 0;
+      left = left || dc <= 0;
+      right = right || dc >= 0;
+    }
+  }
+  if (!std::isfinite(nearest)) return Visibility::kUnknown;
+  if (below && above && left && right && r < nearest - margin) return Visibility::kFree;
+  if (hit) return Visibility::kHit;
+  return nearest < r ? Visibility::kOccluded : Visibility::kUnknown;
+}
+
+}  // namespace mmlio::map

@@ -1,0 +1,91 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "mmlio/map/range_image.hpp"
+
+namespace mmlio::map {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+Point at(double range, double azimuth_deg, double elevation_deg) {
+  Point p;
+  const double a = azimuth_deg * kDeg, e = elevation_deg * kDeg;
+  p.xyz = (range * Eigen::Vector3d(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e))).cast<float>();
+  return p;
+}
+
+Eigen::Vector3d dir(double range, double azimuth_deg, double elevation_deg) {
+  return at(range, azimuth_deg, elevation_deg).xyz.cast<double>();
+}
+
+// A wall 10 m ahead seen over azimuth +-30 deg and elevation +-10 deg, dense.
+std::vector<Point> wallAhead() {
+  std::vector<Point> pts;
+  for (double a = -30; a <= 30; a += 0.2)
+    for (double e = -10; e <= 10; e += 0.2) pts.push_back(at(10.0 / (std::cos(a * kDeg) * std::cos(e * kDeg)), a, e));
+  return pts;
+}
+
+}  // namespace
+
+TEST(RangeImage, InFrontOfAWallIsFreeOnItIsHitBehindItIsOccludedElsewhereUnknown) {
+  const RangeImage image(wallAhead(), RangeImageConfig{});
+  EXPECT_EQ(image.classify(dir(5.0, 0, 0)), Visibility::kFree);
+  EXPECT_EQ(image.classify(dir(10.0, 0.1, 0.1)), Visibility::kHit);
+  EXPECT_EQ(image.classify(dir(13.0, 0, 0)), Visibility::kOccluded);
+  EXPECT_EQ(image.classify(dir(5.0, 90, 0)), Visibility::kUnknown);    // nobody looked there
+  EXPECT_EQ(image.classify(dir(0.3, 0, 0)), Visibility::kUnknown);     // inside the blind zone
+  EXPECT_EQ(image.classify(dir(9.8, 0, 0)), Visibility::kHit);         // within the margin: a surface, not free
+}
+
+TEST(RangeImage, PointsAtTheEdgeOfTheFieldOfViewAreNeverFree) {
+  const RangeImage image(wallAhead(), RangeImageConfig{});
+  // Inside the window of measured pixels but not surrounded by them: a ray beside it, none beyond.
+  EXPECT_NE(image.classify(dir(5.0, 30.6, 0)), Visibility::kFree);
+  EXPECT_NE(image.classify(dir(5.0, 0, 11.5)), Visibility::kFree);
+}
+
+TEST(RangeImage, BesideADepthEdgeOnlyWhatIsInFrontOfBothSidesIsFree) {
+  std::vector<Point> pts;
+  for (double a = -20; a <= 20; a += 0.2)
+    for (double e = -5; e <= 5; e += 0.2) pts.push_back(at(a < 0 ? 10.0 : 3.0, a, e));
+  const RangeImage image(pts, RangeImageConfig{});
+  EXPECT_EQ(image.classify(dir(6.0, -10, 0)), Visibility::kFree);     // far from the edge
+  EXPECT_NE(image.classify(dir(6.0, -0.3, 0)), Visibility::kFree);    // behind the near side's rays
+  EXPECT_EQ(image.classify(dir(2.0, -0.3, 0)), Visibility::kFree);    // in front of both
+}
+
+TEST(RangeImage, AFloorBetweenTheRingsOfASpinningLidarIsNotFree) {
+  // VLP-16: rings every 2 deg from -15 to +15; the floor 1.2 m below at grazing incidence.
+  std::vector<Point> pts;
+  for (int ring = 0; ring < 16; ++ring) {
+    const double e = -15.0 + 2.0 * ring;
+    for (double a = -180; a < 180; a += 0.2) {
+      const double range = e < -0.5 ? 1.2 / std::sin(-e * kDeg) : 20.0;
+      pts.push_back(at(std::min(range, 20.0), a, e));
+    }
+  }
+  const RangeImage image(pts, RangeImageConfig{});
+  for (double e = -14.5; e < -1.0; e += 0.25) {
+    const Eigen::Vector3d floor_point = dir(1.2 / std::sin(-e * kDeg), 40.0, e);
+    EXPECT_NE(image.classify(floor_point), Visibility::kFree) << "elevation " << e;
+  }
+  // A person-sized gap: 2 m ahead at chest height, in front of the 20 m returns above the horizon.
+  EXPECT_EQ(image.classify(dir(2.0, 40.0, 5.0)), Visibility::kFree);
+}
+
+TEST(RangeImage, NoReturnPointsAndNonFiniteOnesAreIgnored) {
+  std::vector<Point> pts = wallAhead();
+  Point zero;
+  pts.push_back(zero);
+  Point nan;
+  nan.xyz = Eigen::Vector3f(std::nanf(""), 0.f, 0.f);
+  pts.push_back(nan);
+  const RangeImage image(pts, RangeImageConfig{});
+  EXPECT_EQ(image.classify(dir(5.0, 0, 0)), Visibility::kFree);
+  EXPECT_TRUE(RangeImage({zero}, RangeImageConfig{}).empty());
+}
+
+}  // namespace mmlio::map
