@@ -4,7 +4,8 @@
 # worst ATE, end-to-end error (% of path) and map sharpness per scene and mode, and keeps every
 # run's JSON line in OUT/results.jsonl.
 # Usage: scripts/accuracy.sh [OUT]   (default accuracy_out)
-#   SCENES="office corridor corridor_blind hall" SEEDS="1 2 3" NOISE="1 3 5" MODES="hvi vi hi"
+#   SCENES="office corridor corridor_blind hall" SEEDS="1 2 3" NOISE="1 3 5" MODES="hvi vi hi" PEOPLE="0"
+#   (PEOPLE="0 4": every cell also with 4 people walking; the table then has a row per people count)
 #   JOBS=2 (parallel cells; each run also uses TBB threads)
 #   scripts/accuracy.sh --list prints the job commands instead (one per line, for a cluster scheduler),
 #   scripts/accuracy.sh --summarise OUT prints the table of an existing results.jsonl.
@@ -14,12 +15,13 @@ SCENES="${SCENES:-office corridor corridor_blind hall}"
 SEEDS="${SEEDS:-1 2 3}"
 NOISE="${NOISE:-1 3 5}"
 MODES="${MODES:-hvi vi hi}"
+PEOPLE="${PEOPLE:-0}"
 JOBS="${JOBS:-2}"
 
 jobs() {
-  for sc in $SCENES; do for seed in $SEEDS; do for n in $NOISE; do
-    echo "scripts/accuracy_job.sh $1 $sc $seed $n $MODES"
-  done; done; done
+  for sc in $SCENES; do for seed in $SEEDS; do for n in $NOISE; do for p in $PEOPLE; do
+    echo "PEOPLE=$p scripts/accuracy_job.sh $1 $sc $seed $n $MODES"
+  done; done; done; done
 }
 
 summarise() {
@@ -29,10 +31,13 @@ rows = [json.loads(l) for l in open(sys.argv[1]) if l.strip()]
 order = {"hvi": 0, "vi": 1, "hi": 2, "hvi+loop": 3}
 def fmt(v, scale=100, unit="cm", digits=2):
     return "n/a" if v is None else f"{v * scale:.{digits}f}{(' ' + unit) if unit else ''}"
-print("| scene | run | runs | ATE median | ATE worst | end-to-end % of path median / worst | map to surfaces median | HVI <= min(VI, HI) |")
-print("|---|---|---|---|---|---|---|---|")
-scenes = sorted({r["scene"] for r in rows}, key=lambda s: ["office", "corridor", "corridor_blind", "hall"].index(s)
-                if s in ["office", "corridor", "corridor_blind", "hall"] else 9)
+for r in rows:
+    if r.get("people", 0):
+        r["scene"] = f'{r["scene"]} +{r["people"]} people'
+print("| scene | run | runs | ATE median | ATE worst | end-to-end % of path median / worst | map to surfaces median | map off surfaces median / worst | HVI <= min(VI, HI) |")
+print("|---|---|---|---|---|---|---|---|---|")
+base = ["office", "corridor", "corridor_blind", "hall"]
+scenes = sorted({r["scene"] for r in rows}, key=lambda s: (base.index(s.split()[0]) if s.split()[0] in base else 9, s))
 for sc in scenes:
     cells = {}
     for r in rows:
@@ -44,6 +49,7 @@ for sc in scenes:
         ate = [r["ate_rmse_m"] for r in ok]
         e2e = [100 * r["end_to_end_m"] / r["path_length_m"] for r in ok if r.get("path_length_m")]
         mp = [r["map_median_m"] for r in ok if "map_median_m" in r]
+        off = [r["map_off_surface_fraction"] for r in ok if "map_off_surface_fraction" in r]
         failed = len(rs) - len(ok)
         beat = ""
         if run == "hvi":
@@ -57,7 +63,8 @@ for sc in scenes:
         print(f"| {sc} | {run} | {len(ok)}{f' ({failed} failed)' if failed else ''} | "
               f"{fmt(statistics.median(ate)) if ate else 'n/a'} | {fmt(max(ate)) if ate else 'n/a'} | "
               f"{f'{statistics.median(e2e):.3f} / {max(e2e):.3f}' if e2e else 'n/a'} | "
-              f"{fmt(statistics.median(mp), 1000, 'mm', 1) if mp else 'n/a'} | {beat} |")
+              f"{fmt(statistics.median(mp), 1000, 'mm', 1) if mp else 'n/a'} | "
+              f"{f'{100 * statistics.median(off):.2f} / {100 * max(off):.2f} %' if off else 'n/a'} | {beat} |")
 PY
 }
 

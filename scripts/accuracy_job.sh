@@ -4,6 +4,8 @@
 # trajectory and map, prints one JSON line per run and deletes the bag (KEEP_BAGS=1 keeps it).
 # Seed 1: Lissajous (Horizon-like) pattern, nominal mount; even seeds: rosette pattern; seeds >= 2:
 # both extrinsics and the Velodyne sweep phase drawn from the seed.
+# PEOPLE=N (default 0) puts N people walking through the scene (simulate --people N); the map is then
+# also scored for what is off the static surfaces.
 # Usage: scripts/accuracy_job.sh OUT SCENE SEED LEVEL [MODES...]   (modes: hvi vi hi hvi+loop)
 set -euo pipefail
 OUT="$1" SCENE="$2" SEED="$3" LEVEL="$4"
@@ -12,7 +14,9 @@ MODES=("${@:-hvi vi hi}")
 read -r -a MODES <<< "${MODES[*]}"
 MMLIO="${MMLIO:-build/mmlio}"
 CONFIG_DIR="${CONFIG_DIR:-config}"
+PEOPLE="${PEOPLE:-0}"
 cell="$SCENE-s$SEED-n$LEVEL"
+[ "$PEOPLE" -gt 0 ] && cell="$cell-p$PEOPLE"
 dir="$OUT/$cell"
 mkdir -p "$dir"
 
@@ -25,7 +29,8 @@ mount=()
 imu=(--acc-noise "$(echo "0.002*$LEVEL" | bc -l)" --gyro-noise "$(echo "0.0002*$LEVEL" | bc -l)"
      --acc-walk "$(echo "0.00006*$LEVEL" | bc -l)" --gyro-walk "$(echo "0.000004*$LEVEL" | bc -l)"
      --acc-bias "$(echo "0.01*$LEVEL" | bc -l)")
-"$MMLIO" -q simulate --scenario "$SCENE" --seed "$SEED" --pattern "$pattern" "${mount[@]}" "${imu[@]}" --out "$dir" \
+"$MMLIO" -q simulate --scenario "$SCENE" --seed "$SEED" --pattern "$pattern" "${mount[@]}" "${imu[@]}" \
+  --people "$PEOPLE" --out "$dir" \
   > "$dir/simulate.log" 2>&1
 
 for run in "${MODES[@]}"; do
@@ -41,10 +46,11 @@ for run in "${MODES[@]}"; do
     ev=$("$MMLIO" evaluate --gt "$dir/${SCENE}_gt.tum" --est "$rd/trajectory.tum" --map "$rd/map.pcd" \
       --scenario "$SCENE" --json 2>/dev/null || echo '{}')
   fi
-  python3 - "$SCENE" "$SEED" "$LEVEL" "$pattern" "$run" "$status" "$rd" "$ev" <<'PY'
+  python3 - "$SCENE" "$SEED" "$LEVEL" "$pattern" "$run" "$status" "$rd" "$ev" "$PEOPLE" <<'PY'
 import json, os, sys
-scene, seed, level, pattern, run, status, rd, ev = sys.argv[1:]
-row = {"scene": scene, "seed": int(seed), "noise": int(level), "pattern": pattern, "run": run, "status": status}
+scene, seed, level, pattern, run, status, rd, ev, people = sys.argv[1:]
+row = {"scene": scene, "seed": int(seed), "noise": int(level), "pattern": pattern, "people": int(people), "run": run,
+       "status": status}
 row.update(json.loads(ev))
 rep = os.path.join(rd, "report.json")
 if os.path.exists(rep):
@@ -52,6 +58,7 @@ if os.path.exists(rep):
     t = r.get("timing", {})
     row["odometry_ms"] = sum(v["mean_ms"] for k, v in t.items() if k not in ("total", "mapping_backend"))
     row["degenerate_sweeps"] = r.get("sweeps", {}).get("degenerate", None)
+    row["map_points_removed"] = r.get("dynamic", {}).get("map_points_removed", None)
 print(json.dumps(row))
 PY
   rm -rf "$rd/map.pcd" "$rd"/map_*.pcd

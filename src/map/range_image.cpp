@@ -28,14 +28,14 @@ RangeImage::RangeImage(const std::vector<Point>& points, const RangeImageConfig&
   if (lo > hi) return;
   row0_ = lo;
   rows_ = hi - lo + 1;
-  ranges_.assign(static_cast<std::size_t>(rows_) * static_cast<std::size_t>(cols_), 0.f);
+  ranges_.assign(static_cast<std::size_t>(rows_) * static_cast<std::size_t>(cols_), 0);
   for (const Point& p : points) {
     int col, row;
     const Eigen::Vector3d v = p.xyz.cast<double>();
     if (!pixelOf(v, &col, &row) || row < 0 || row >= rows_) continue;
-    float& cell = ranges_[static_cast<std::size_t>(row) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(col)];
-    const auto r = static_cast<float>(v.norm());
-    if (cell == 0.f || r < cell) cell = r;
+    std::uint16_t& cell = ranges_[static_cast<std::size_t>(row) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(col)];
+    const auto cm = static_cast<std::uint16_t>(std::clamp(std::lround(v.norm() * 100.0), 1L, 65535L));
+    if (cell == 0 || cm < cell) cell = cm;
   }
 }
 
@@ -59,12 +59,12 @@ Visibility RangeImage::classify(const Eigen::Vector3d& p) const {
   for (int dr = -cfg_.window_rows; dr <= cfg_.window_rows; ++dr) {
     const int y = row + dr;
     if (y < 0 || y >= rows_) continue;
-    const float* line = &ranges_[static_cast<std::size_t>(y) * static_cast<std::size_t>(cols_)];
+    const std::uint16_t* line = &ranges_[static_cast<std::size_t>(y) * static_cast<std::size_t>(cols_)];
     for (int dc = -cfg_.window_cols; dc <= cfg_.window_cols; ++dc) {
       const int x = (col + dc + cols_) % cols_;
-      const float m = line[x];
-      if (m == 0.f) continue;
-      nearest = std::min(nearest, static_cast<double>(m));
+      if (line[x] == 0) continue;
+      const double m = 0.01 * line[x];
+      nearest = std::min(nearest, m);
       // Seen ON: a return at the point's range in its own pixel or the ones just above and below.
       // The rest of the window does not count: at grazing incidence it reaches a wall or the floor
       // at every range near the point's.

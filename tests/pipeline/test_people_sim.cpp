@@ -19,12 +19,13 @@ struct PeopleRun {
   double off_surface = 0.0;         // map points farther than 10 cm from every static surface
   std::size_t static_voxels = 0;    // 10 cm voxels of static surface the map covers
   std::size_t rejected = 0, removed = 0;
+  Trajectory trajectory;
 };
 
-PeopleRun runCorridor(int people, bool handle_dynamic) {
+PeopleRun runCorridor(int people, bool handle_dynamic, double duration_s = 25.0) {
   sim::SimOptions so;
   so.scenario = "corridor";
-  so.duration_s = 25.0;
+  so.duration_s = duration_s;
   so.people = people;
   so.seed = 4;
   const sim::Simulator sim(so);
@@ -43,6 +44,7 @@ PeopleRun runCorridor(int people, bool handle_dynamic) {
   });
   testing::replay(sim, online);
   run.eval = eval::evaluate(sim.groundTruth(), trajectory);
+  run.trajectory = trajectory;
   pipeline::MappingBackend::GhostRemoval ghosts;
   const std::vector<Point> map = mapping.map(nullptr, &ghosts);
   run.removed = ghosts.removed_points;
@@ -79,6 +81,16 @@ TEST(PeopleOnSimulation, WalkersNeitherPullTheOdometryNorStayInTheMapAndTheStati
   EXPECT_GT(handled.static_voxels, 0.98 * ignored.static_voxels);
   EXPECT_GT(handled.rejected, 1000u);
   EXPECT_LT(empty.removed, 0.001 * empty.static_voxels);  // static surfaces are not mistaken for ghosts
+}
+
+TEST(PeopleOnSimulation, TheSameSequenceGivesTheSameTrajectoryAndMapCleaning) {
+  const PeopleRun a = runCorridor(4, true, 12.0), b = runCorridor(4, true, 12.0);
+  ASSERT_EQ(a.trajectory.size(), b.trajectory.size());
+  ASSERT_GT(a.rejected, 0u);
+  for (std::size_t i = 0; i < a.trajectory.size(); ++i)
+    ASSERT_TRUE(a.trajectory[i].T_world_body.isApprox(b.trajectory[i].T_world_body, 0.0)) << "pose " << i;
+  EXPECT_EQ(a.rejected, b.rejected);
+  EXPECT_EQ(a.removed, b.removed);
 }
 
 }  // namespace

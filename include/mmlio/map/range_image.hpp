@@ -37,7 +37,7 @@ class RangeImage {
 
   Visibility classify(const Eigen::Vector3d& p_sensor) const;
   bool empty() const { return ranges_.empty(); }
-  std::size_t memoryBytes() const { return ranges_.size() * sizeof(float); }
+  std::size_t memoryBytes() const { return ranges_.size() * sizeof(ranges_[0]); }
 
  private:
   bool pixelOf(const Eigen::Vector3d& p, int* col, int* row) const;  // row relative to row0_, may lie outside
@@ -45,7 +45,9 @@ class RangeImage {
   RangeImageConfig cfg_;
   double inv_res_ = 1.0;
   int cols_ = 0, rows_ = 0, row0_ = 0;
-  std::vector<float> ranges_;  // rows_ x cols_, 0 = no return
+  // rows_ x cols_, nearest return in cm (0 = none): half the memory of floats, far below the margins
+  // (keyframes keep their images for the map's ghost removal).
+  std::vector<std::uint16_t> ranges_;
 };
 
 }  // namespace mmlio::map
