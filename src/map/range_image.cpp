@@ -54,6 +54,7 @@ Visibility RangeImage::classify(const Eigen::Vector3d& p) const {
   int col, row;  // a row just outside the image still sees measured rows through the window
   pixelOf(p, &col, &row);
   const double margin = cfg_.margin_m + cfg_.margin_fraction * r;
+  const double hit_margin = cfg_.hit_margin_m + cfg_.hit_margin_fraction * r;
   double nearest = std::numeric_limits<double>::infinity();
   bool hit = false, below = false, above = false, left = false, right = false;
   for (int dr = -cfg_.window_rows; dr <= cfg_.window_rows; ++dr) {
@@ -68,7 +69,7 @@ Visibility RangeImage::classify(const Eigen::Vector3d& p) const {
       // Seen ON: a return at the point's range in its own pixel or the ones just above and below.
       // The rest of the window does not count: at grazing incidence it reaches a wall or the floor
       // at every range near the point's.
-      hit = hit || (dc == 0 && std::abs(dr) <= 1 && std::abs(m - r) <= margin);
+      hit = hit || (dc == 0 && std::abs(dr) <= 1 && std::abs(m - r) <= hit_margin);
       below = below || dr <= 0;
       above = above || dr >= 0;
       left = left || dc <= 0;

@@ -37,7 +37,8 @@ TEST(RangeImage, InFrontOfAWallIsFreeOnItIsHitBehindItIsOccludedElsewhereUnknown
   EXPECT_EQ(image.classify(dir(13.0, 0, 0)), Visibility::kOccluded);
   EXPECT_EQ(image.classify(dir(5.0, 90, 0)), Visibility::kUnknown);    // nobody looked there
   EXPECT_EQ(image.classify(dir(0.3, 0, 0)), Visibility::kUnknown);     // inside the blind zone
-  EXPECT_EQ(image.classify(dir(9.8, 0, 0)), Visibility::kHit);         // within the margin: a surface, not free
+  EXPECT_EQ(image.classify(dir(9.9, 0, 0)), Visibility::kHit);         // within the range noise: on the wall
+  EXPECT_EQ(image.classify(dir(9.8, 0, 0)), Visibility::kUnknown);     // too close to be free, too far to be on it
 }
 
 TEST(RangeImage, PointsAtTheEdgeOfTheFieldOfViewAreNeverFree) {

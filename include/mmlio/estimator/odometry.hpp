@@ -49,7 +49,7 @@ struct OdometryConfig {
   double keyframe_translation_m = 1.0;  // ... or this translation ...
   double keyframe_interval_s = 2.0;     // ... or this time
   int max_iterations = 10;              // solver iterations per optimisation
-  double huber_loss_m = 0.1;            // robust loss scale of point-to-edge/plane residuals
+  double huber_loss_m = 0.05;           // robust loss scale of point-to-edge/plane residuals
   double lidar_sigma_m = 0.05;          // point-to-map residual standard deviation
   int match_rounds = 2;                 // correspondence re-association rounds per sweep
   double prior_sigma_v_m_s = 0.05;      // registration: how far the previous sweep's velocity may move

@@ -40,7 +40,7 @@ struct SlidingWindowConfig {
   int size = 4;                   // keyframes kept; the oldest beyond is marginalised
   int max_iterations = 10;        // solver iterations per optimisation
   double lidar_sigma_m = 0.05;    // point-to-map residual standard deviation
-  double huber_loss_m = 0.1;      // robust loss scale of the point-to-map residuals
+  double huber_loss_m = 0.05;     // robust loss scale of the point-to-map residuals
   MapMatchConfig matching;
 };
 

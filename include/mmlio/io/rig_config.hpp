@@ -67,7 +67,7 @@ struct OdometryConfig {
   double keyframe_translation_m = 1.0;   // ... or this translation ...
   double keyframe_interval_s = 2.0;      // ... or this time
   int max_iterations = 10;               // solver iterations per window
-  double huber_loss_m = 0.1;             // robust loss scale of point-to-edge/plane residuals
+  double huber_loss_m = 0.05;            // robust loss scale of point-to-edge/plane residuals
 };
 
 struct LoopConfig {
