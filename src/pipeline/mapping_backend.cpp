@@ -67,6 +67,8 @@ void MappingBackend::finish() {
   // is rarely a multiple of loop_check_every: check the last keyframe once more.
   const int last = static_cast<int>(graph_.size()) - 1;
   if (closer_ && last > 0 && last != last_checked_) tryLoop(last);
+  closeSubmap();  // the newest keyframe's submap is complete now
+  judgeSubmaps(true);
 }
 
 void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
@@ -83,8 +85,9 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
       node.cloud_body = backend::voxelCentroids(pts, cfg_.loop_cloud_voxel_m);
     }
     const int k = graph_.addKeyframe(std::move(node));
-    views_.push_back(cfg_.clean_map ? sweep.view : nullptr);
+    if (cfg_.clean_map && sweep.view) views_[static_cast<std::size_t>(k)] = sweep.view;
     closeSubmap();
+    judgeSubmaps(false);
     submaps_.emplace_back();
     T_world_keyframe_ = T_world_body;
 
@@ -166,16 +169,22 @@ std::vector<Point> MappingBackend::mergedMap(const std::string* only_lidar) cons
   return merged.points();
 }
 
-std::vector<Point> MappingBackend::map(std::vector<Point>* removed, GhostRemoval* stats) const {
-  std::vector<Point> points = mergedMap(nullptr);
-  if (!cfg_.clean_map) return points;
-  return removeGhosts(std::move(points), removed, stats);
-}
+std::vector<Point> MappingBackend::map() const { return mergedMap(nullptr); }
 
 std::vector<Point> MappingBackend::dynamicMap() const { return dynamic_.points(); }
 
-std::vector<Point> MappingBackend::removeGhosts(std::vector<Point> points, std::vector<Point>* removed,
-                                                GhostRemoval* stats) const {
+void MappingBackend::judgeSubmaps(bool all) {
+  if (!cfg_.clean_map) return;
+  // Closed submaps are those before the newest keyframe (whose submap is still filling), all of
+  // them after finish() closed the last one.
+  const std::size_t closed = all ? submaps_.size() : (submaps_.empty() ? 0 : submaps_.size() - 1);
+  const std::size_t after = static_cast<std::size_t>(std::max(0, cfg_.ghost_keyframes));
+  for (; judged_ < closed && (all || judged_ + after < submaps_.size()); ++judged_) removeGhosts(judged_);
+  // Views no later submap can use any more.
+  while (!views_.empty() && views_.begin()->first + after < judged_) views_.erase(views_.begin());
+}
+
+void MappingBackend::removeGhosts(std::size_t submap) {
   // One vote per keyframe (its LiDARs together): seen through by any of them, else seen on.
   struct Eye {
     const map::RangeImage* image;
@@ -183,52 +192,57 @@ std::vector<Point> MappingBackend::removeGhosts(std::vector<Point> points, std::
     Eigen::Vector3d origin;
     std::size_t keyframe;
   };
+  const std::size_t reach = static_cast<std::size_t>(std::max(0, cfg_.ghost_keyframes));
   std::vector<Eye> eyes;
-  for (std::size_t k = 0; k < views_.size() && k < graph_.size(); ++k) {
-    if (!views_[k]) continue;
-    const Eigen::Isometry3d T_world_body = graph_.pose(static_cast<int>(k));
-    for (const estimator::SensorView& s : views_[k]->sensors) {
+  for (auto it = views_.lower_bound(submap > reach ? submap - reach : 0);
+       it != views_.end() && it->first <= submap + reach; ++it) {
+    if (!it->second || static_cast<int>(it->first) >= static_cast<int>(graph_.size())) continue;
+    const Eigen::Isometry3d T_world_body = graph_.pose(static_cast<int>(it->first));
+    for (const estimator::SensorView& s : it->second->sensors) {
       const Eigen::Isometry3d T_world_sensor = T_world_body * s.T_body_sensor;
-      eyes.push_back({&s.image, T_world_sensor.inverse(), T_world_sensor.translation(), k});
+      eyes.push_back({&s.image, T_world_sensor.inverse(), T_world_sensor.translation(), it->first});
     }
   }
-  std::vector<std::uint8_t> ghost(points.size(), 0), judged(points.size(), 0);
+  if (eyes.empty()) return;
+  const Eigen::Isometry3d T_world_keyframe = graph_.pose(static_cast<int>(submap));
   const double r2 = cfg_.ghost_range_m * cfg_.ghost_range_m;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      const Eigen::Vector3d p = points[i].xyz.cast<double>();
-      int free = 0, hit = 0;
-      for (std::size_t e = 0; e < eyes.size();) {
-        bool view_free = false, view_hit = false;
-        const std::size_t k = eyes[e].keyframe;
-        for (; e < eyes.size() && eyes[e].keyframe == k; ++e) {
-          if ((p - eyes[e].origin).squaredNorm() > r2) continue;
-          const map::Visibility v = eyes[e].image->classify(eyes[e].T_sensor_world * p);
-          view_free = view_free || v == map::Visibility::kFree;
-          view_hit = view_hit || v == map::Visibility::kHit;
+  for (auto& [lidar, points] : submaps_[submap]) {
+    std::vector<std::uint8_t> ghost(points.size(), 0), judged(points.size(), 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 512), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i < r.end(); ++i) {
+        const Eigen::Vector3d p = T_world_keyframe * points[i].xyz.cast<double>();
+        int free = 0, hit = 0;
+        for (std::size_t e = 0; e < eyes.size();) {
+          bool view_free = false, view_hit = false;
+          const std::size_t k = eyes[e].keyframe;
+          for (; e < eyes.size() && eyes[e].keyframe == k; ++e) {
+            if ((p - eyes[e].origin).squaredNorm() > r2) continue;
+            const map::Visibility v = eyes[e].image->classify(eyes[e].T_sensor_world * p);
+            view_free = view_free || v == map::Visibility::kFree;
+            view_hit = view_hit || v == map::Visibility::kHit;
+          }
+          free += view_free;
+          hit += view_hit && !view_free;
         }
-        free += view_free;
-        hit += view_hit && !view_free;
+        judged[i] = free + hit > 0;
+        // The keyframe that stored a point saw it: a ghost has one hit of its own.
+        ghost[i] = free >= 2 && free > hit;
       }
-      judged[i] = free + hit > 0;
-      // The keyframe that stored a point saw it: a ghost has one hit of its own.
-      ghost[i] = free >= 2 && free > hit;
+    });
+    std::vector<Point> removed;
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      ghosts_.judged_points += judged[i];
+      if (ghost[i]) {
+        removed.push_back(points[i]);
+        continue;
+      }
+      points[kept++] = points[i];
     }
-  });
-  std::size_t kept = 0;
-  GhostRemoval g;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    g.judged_points += judged[i];
-    if (ghost[i]) {
-      if (removed) removed->push_back(points[i]);
-      continue;
-    }
-    points[kept++] = points[i];
+    ghosts_.removed_points += points.size() - kept;
+    points.resize(kept);
+    if (cfg_.dynamic_map && !removed.empty()) dynamic_.add(removed, T_world_keyframe);
   }
-  g.removed_points = points.size() - kept;
-  points.resize(kept);
-  if (stats) *stats = g;
-  return points;
 }
 
 std::vector<Point> MappingBackend::lidarMap(const std::string& lidar) const { return mergedMap(&lidar); }

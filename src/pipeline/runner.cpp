@@ -15,7 +15,7 @@
 #include "mmlio/io/pcd_io.hpp"
 #include "mmlio/io/trajectory_writer.hpp"
 #include "mmlio/pipeline/online_pipeline.hpp"
-#include "mmlio/pipeline/mapping_backend.hpp"
+#include "mmlio/pipeline/mapping_thread.hpp"
 #include "mmlio/pipeline/odometry_setup.hpp"
 #include "mmlio/pipeline/degeneracy_tally.hpp"
 #include "mmlio/pipeline/progress.hpp"
@@ -43,7 +43,7 @@ RunResult runBag(const RunOptions& options) {
   if (!io::isValidMode(mode)) throw Error("unknown mode '" + mode + "' (expected hvi, vi or hi)");
 
   io::BagSource source(options.bag_path, io::bagSourceOptions(cfg, mode));
-  MappingBackend mapping(mappingBackendConfig(cfg));
+  MappingThread mapping(mappingBackendConfig(cfg));
 
   RunResult result;
   std::map<std::string, LidarTally> tally;
@@ -63,9 +63,9 @@ RunResult runBag(const RunOptions& options) {
     dynamic_points += r.dynamic_points;
     dynamic_sweeps += r.dynamic_points > 0;
     carved_points += r.carved_points;
-    mapping.addSweep(r);
+    mapping.addSweep(r);  // a copy: the back end works on it on its own thread
     StageTimes times = r.times_ms;
-    times.emplace_back("mapping_backend", t.lapMs());
+    times.emplace_back("mapping_handoff", t.lapMs());
     result.timing.add(times);
     for (const auto& l : r.lidars) {
       LidarTally& lt = tally[l.sensor];
@@ -121,6 +121,12 @@ RunResult runBag(const RunOptions& options) {
     log::emit(log::Level::kError, "stopped early: ", e.what(), " (writing the ", result.trajectory.size(),
               " poses computed so far)");
   }
+  try {
+    mapping.finish();  // after an early stop: what was queued still reaches the map
+  } catch (const std::exception& e) {  // a failed back end must not cost the trajectory
+    log::warn("mapping back end failed: ", e.what(), " (odometry trajectory and the map so far are written)");
+  }
+  MappingBackend& backend = mapping.backend();
   const std::size_t sweeps = online.sweepsProcessed();
   const double wall_s = wall.elapsedMs() * 1e-3;
   progress.finish(std::to_string(sweeps) + " sweeps, " + std::to_string(result.trajectory.size()) + " poses");
@@ -191,18 +197,17 @@ RunResult runBag(const RunOptions& options) {
   rep["wall_time_s"] = wall_s;
   rep["realtime_factor"] = wall_s > 0 ? toSec(odometry.lastImuNs() - source.beginNs()) / wall_s : 0.0;
 
-  try {
-    mapping.finish();
-  } catch (const std::exception& e) {  // a failed last loop check must not cost the trajectory
-    log::warn("final loop check failed: ", e.what());
-  }
-  rep["mapping"] = mapping.toJson();
+  rep["mapping"] = backend.toJson();
+  result.backend_timing = mapping.timing();
+  rep["timing_backend"] = result.backend_timing.toJson();
 
   // ---- outputs ----
-  result.trajectory = mapping.correctedTrajectory();
-  std::vector<Point> dynamic_map = mapping.dynamicMap();
-  MappingBackend::GhostRemoval ghosts;
-  const std::vector<Point> map_points = mapping.map(&dynamic_map, &ghosts);
+  result.trajectory = backend.correctedTrajectory();
+  Stopwatch assembly;
+  const std::vector<Point> map_points = backend.map();
+  const std::vector<Point> dynamic_map = backend.dynamicMap();
+  const MappingBackend::GhostRemoval& ghosts = backend.ghostRemoval();
+  const double map_s = assembly.elapsedMs() * 1e-3;
   result.map_points = map_points.size();
   Json dyn = Json::object();
   dyn["enabled"] = cfg.dynamic.enabled;
@@ -213,6 +218,7 @@ RunResult runBag(const RunOptions& options) {
   dyn["map_points_judged"] = ghosts.judged_points;
   dyn["map_points_removed"] = ghosts.removed_points;
   dyn["dynamic_map_points"] = dynamic_map.size();
+  dyn["map_assembly_s"] = map_s;  // merging the submaps (ghosts were removed during the run)
   rep["dynamic"] = dyn;
   if (!options.out_dir.empty()) {
     namespace fs = std::filesystem;
@@ -231,13 +237,13 @@ RunResult runBag(const RunOptions& options) {
     out["map_points"] = map_points.size();
     out["map_voxel_m"] = cfg.output.map_voxel_m;
     Json per_lidar_maps = Json::object();
-    for (const std::string& lidar : mapping.lidarNames()) {
+    for (const std::string& lidar : backend.lidarNames()) {
       const std::string path = dir + "map_" + lidar + ".pcd";
-      const std::vector<Point> points = mapping.lidarMap(lidar);
+      const std::vector<Point> points = backend.lidarMap(lidar);
       io::writePcdBinary(path, points);
       per_lidar_maps[lidar] = path;
     }
-    if (!mapping.lidarNames().empty()) out["per_lidar_maps"] = per_lidar_maps;
+    if (!backend.lidarNames().empty()) out["per_lidar_maps"] = per_lidar_maps;
     if (cfg.output.dynamic_map) {
       io::writePcdBinary(dir + "map_dynamic.pcd", dynamic_map);
       out["dynamic_map"] = dir + "map_dynamic.pcd";

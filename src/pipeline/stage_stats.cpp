@@ -42,6 +42,16 @@ double StageStats::p95Ms(const std::string& stage) const {
   return it == samples_.end() ? 0.0 : percentile(it->second, 0.95);
 }
 
+double StageStats::p99Ms(const std::string& stage) const {
+  const auto it = samples_.find(stage);
+  return it == samples_.end() ? 0.0 : percentile(it->second, 0.99);
+}
+
+double StageStats::maxMs(const std::string& stage) const {
+  const auto it = samples_.find(stage);
+  return it == samples_.end() || it->second.empty() ? 0.0 : *std::max_element(it->second.begin(), it->second.end());
+}
+
 std::vector<std::string> StageStats::stages() const {
   std::vector<std::string> out = order_;
   if (samples_.count("total")) out.push_back("total");
@@ -55,7 +65,8 @@ Json StageStats::toJson() const {
     Json s = Json::object();
     s["mean_ms"] = meanMs(stage);
     s["p95_ms"] = p95Ms(stage);
-    s["max_ms"] = v.empty() ? 0.0 : *std::max_element(v.begin(), v.end());
+    s["p99_ms"] = p99Ms(stage);
+    s["max_ms"] = maxMs(stage);
     s["samples"] = v.size();
     j[stage] = s;
   }
@@ -65,11 +76,12 @@ Json StageStats::toJson() const {
 std::string StageStats::table() const {
   std::string out;
   char line[160];
-  std::snprintf(line, sizeof(line), "%-16s %10s %10s %8s\n", "stage", "mean ms", "p95 ms", "sweeps");
+  std::snprintf(line, sizeof(line), "%-16s %9s %9s %9s %9s %8s\n", "stage", "mean ms", "p95 ms", "p99 ms", "max ms",
+                "sweeps");
   out += line;
   for (const auto& stage : stages()) {
-    std::snprintf(line, sizeof(line), "%-16s %10.2f %10.2f %8zu\n", stage.c_str(), meanMs(stage),
-                  p95Ms(stage), samples_.at(stage).size());
+    std::snprintf(line, sizeof(line), "%-16s %9.2f %9.2f %9.2f %9.2f %8zu\n", stage.c_str(), meanMs(stage),
+                  p95Ms(stage), p99Ms(stage), maxMs(stage), samples_.at(stage).size());
     out += line;
   }
   return out;

@@ -4,6 +4,7 @@
 
 #include "../backend/synthetic_scene.hpp"
 #include "mmlio/pipeline/mapping_backend.hpp"
+#include "mmlio/pipeline/mapping_thread.hpp"
 
 namespace mmlio::pipeline {
 namespace {
@@ -123,6 +124,23 @@ TEST(MappingBackend, PerLidarMapsKeepEachLidarsPointsApart) {
   merged.addSweep(r);
   EXPECT_TRUE(merged.lidarNames().empty());
   EXPECT_EQ(merged.map().size(), 50u);
+}
+
+TEST(MappingThread, OnItsOwnThreadTheBackEndGivesExactlyWhatItGivesInline) {
+  const auto scene = backend::testing::roomA();
+  const Walk w = roomWalk();
+  MappingBackend inline_backend(config());
+  for (std::size_t i = 0; i < w.truth.size(); ++i) inline_backend.addSweep(sweepAt(w, i, scene));
+  inline_backend.finish();
+  MappingThread thread(config(), 2);  // a queue shorter than the run: the producer waits
+  for (std::size_t i = 0; i < w.truth.size(); ++i) thread.addSweep(sweepAt(w, i, scene));
+  MappingBackend& threaded = thread.finish();
+  ASSERT_EQ(threaded.loops(), 1u);  // the loop of the last keyframe, as inline
+  const Trajectory a = inline_backend.correctedTrajectory(), b = threaded.correctedTrajectory();
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) EXPECT_TRUE(a[i].T_world_body.isApprox(b[i].T_world_body, 0.0)) << i;
+  EXPECT_EQ(inline_backend.map().size(), threaded.map().size());
+  EXPECT_EQ(thread.timing().sweeps(), w.truth.size());
 }
 
 }  // namespace

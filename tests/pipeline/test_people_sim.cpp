@@ -45,9 +45,9 @@ PeopleRun runCorridor(int people, bool handle_dynamic, double duration_s = 25.0)
   testing::replay(sim, online);
   run.eval = eval::evaluate(sim.groundTruth(), trajectory);
   run.trajectory = trajectory;
-  pipeline::MappingBackend::GhostRemoval ghosts;
-  const std::vector<Point> map = mapping.map(nullptr, &ghosts);
-  run.removed = ghosts.removed_points;
+  mapping.finish();
+  const std::vector<Point> map = mapping.map();
+  run.removed = mapping.ghostRemoval().removed_points;
   std::size_t off = 0;
   std::unordered_set<std::uint64_t> voxels;
   for (const Point& p : map) {
@@ -76,9 +76,10 @@ TEST(PeopleOnSimulation, WalkersNeitherPullTheOdometryNorStayInTheMapAndTheStati
   EXPECT_LT(handled.eval.ate_rmse_m, 1.5 * empty.eval.ate_rmse_m);
   EXPECT_GT(ignored.off_surface, 0.03);   // the people leave trails when nothing handles them ...
   EXPECT_LT(handled.off_surface, 0.01);   // ... and none when the map is cleaned
-  // No holes where nobody walked: the cleaning takes nothing static (against the empty corridor a
-  // run this short also misses what the people hid from every view).
-  EXPECT_GT(handled.static_voxels, 0.98 * ignored.static_voxels);
+  // No holes where nobody walked. A run this short also misses what the people hid from every
+  // view (the full 113 s corridor keeps 99.7 %); the unhandled run is no reference: its people's
+  // feet and shoulders count as floor and wall.
+  EXPECT_GT(handled.static_voxels, 0.9 * empty.static_voxels);
   EXPECT_GT(handled.rejected, 1000u);
   EXPECT_LT(empty.removed, 0.001 * empty.static_voxels);  // static surfaces are not mistaken for ghosts
 }

@@ -25,7 +25,7 @@ struct DynamicConfig {
   map::RangeImageConfig image;  // visibility test (margins, window)
   double look_back_min_s = 0.4; // earlier sweeps tested: old enough for a walker to have moved
   double look_back_max_s = 1.2; // ... a body length, young enough to overlap the current view
-  double carve_radius_m = 30.0; // local map points farther than this are not tested
+  double carve_radius_m = 20.0; // local map points farther than this are not tested (image.max_range_m)
 };
 
 /// One LiDAR's view at the end of a sweep.

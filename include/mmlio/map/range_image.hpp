@@ -27,7 +27,8 @@ struct RangeImageConfig {
   double hit_margin_m = 0.05;   // seen on: a return this close to the point's range ...
   double hit_margin_fraction = 0.01;  // ... plus this fraction (tighter than free: a point 10-20 cm in
                                       // front of a wall is neither, not "seen on" by every view of the wall)
-  double min_range_m = 0.5;     // nearer points are never judged (self returns, blind zone)
+  double min_range_m = 0.5;     // nearer points are never judged (self returns, blind zone) ...
+  double max_range_m = 20.0;    // ... nor farther ones (the margin there exceeds a person's depth)
 };
 
 enum class Visibility : std::uint8_t { kUnknown, kFree, kHit, kOccluded };

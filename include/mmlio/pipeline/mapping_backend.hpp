@@ -35,12 +35,14 @@ class MappingBackend {
                                          // surface, not the time spent in it
     double revisit_new_fraction = 0.1;   // a closed keyframe with fewer new voxels than this
                                          // fraction frees its loop cloud (a revisit)
-    bool clean_map = true;               // map(): drop points keyframes saw through (ghosts of movers)
-    bool dynamic_map = true;             // keep what the odometry rejected as moving (dynamicMap)
-    double ghost_range_m = 25.0;         // keyframes judge map points up to this far from a LiDAR
+    bool clean_map = true;               // drop submap points keyframes saw through (ghosts of movers)
+    bool dynamic_map = true;             // keep what was removed as moving (dynamicMap)
+    double ghost_range_m = 20.0;         // keyframes judge map points up to this far from a LiDAR
+    int ghost_keyframes = 16;            // a submap is judged by the views of this many keyframes
+                                         // before and after its own, once they exist
   };
 
-  /// What the ghost removal of map() did.
+  /// What the ghost removal did so far.
   struct GhostRemoval {
     std::size_t judged_points = 0;       // map points at least one keyframe view could judge
     std::size_t removed_points = 0;
@@ -56,12 +58,15 @@ class MappingBackend {
   void finish();
 
   Trajectory correctedTrajectory() const;
-  /// The map at the corrected poses. With clean_map, without the points keyframes saw through at
-  /// least twice and more often than they saw them (something stood there and left); those go to
-  /// *removed. A surface seen once is never removed: only rays that pass it can.
-  std::vector<Point> map(std::vector<Point>* removed = nullptr, GhostRemoval* stats = nullptr) const;
-  /// Points the odometry rejected as moving, at the odometry poses (dynamic_map).
+  /// The map at the corrected poses. With clean_map it no longer holds the points that nearby
+  /// keyframes (ghost_keyframes before and after the one that stored them) saw through at least
+  /// twice and more often than they saw them: something stood there and left. A surface seen once
+  /// is never removed: only rays that pass it can. Each submap is judged once, on the back end's
+  /// thread, as soon as the keyframes after it exist (all of them by finish()).
+  std::vector<Point> map() const;
+  /// What was removed as moving: the odometry's rejected points and the ghosts (dynamic_map).
   std::vector<Point> dynamicMap() const;
+  const GhostRemoval& ghostRemoval() const { return ghosts_; }
   /// With per_lidar_maps: the names of the LiDARs seen, and one LiDAR's map (empty if unknown).
   std::vector<std::string> lidarNames() const;
   std::vector<Point> lidarMap(const std::string& lidar) const;
@@ -86,8 +91,12 @@ class MappingBackend {
   std::map<std::string, std::unordered_set<std::uint64_t>> covered_;  // world voxels held, per LiDAR key
   void closeSubmap();
   std::vector<Point> mergedMap(const std::string* only_lidar) const;
-  std::vector<Point> removeGhosts(std::vector<Point> points, std::vector<Point>* removed, GhostRemoval* stats) const;
-  std::vector<std::shared_ptr<const estimator::SweepView>> views_;  // per keyframe (may be null)
+  void judgeSubmaps(bool all);
+  void removeGhosts(std::size_t submap);
+  // Keyframe views still needed by a submap not yet judged, by keyframe index (may be null).
+  std::map<std::size_t, std::shared_ptr<const estimator::SweepView>> views_;
+  std::size_t judged_ = 0;  // submaps [0, judged_) are judged
+  GhostRemoval ghosts_;
   MapAccumulator dynamic_{0.05};
   Trajectory odometry_;
   Eigen::Isometry3d T_world_keyframe_ = Eigen::Isometry3d::Identity();

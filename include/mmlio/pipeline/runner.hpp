@@ -29,7 +29,8 @@ struct RunOptions {
 
 struct RunResult {
   Trajectory trajectory;          // IMU pose at the end of every tracked sweep
-  StageStats timing;
+  StageStats timing;              // the sweep loop (odometry and hand-off), per sweep
+  StageStats backend_timing;      // the mapping back end, per sweep, on its own thread
   Json report;
   std::size_t map_points = 0;
   bool complete = true;           // false: the bag ended in an error after `trajectory`

@@ -1,5 +1,5 @@
 #pragma once
-// Per-stage timing statistics over a run: mean and 95th percentile of ms per sweep.
+// Per-stage timing statistics over a run: mean, 95th and 99th percentile and maximum ms per sweep.
 #include <map>
 #include <string>
 #include <vector>
@@ -16,9 +16,11 @@ class StageStats {
   std::size_t sweeps() const { return sweeps_; }
   double meanMs(const std::string& stage) const;
   double p95Ms(const std::string& stage) const;
+  double p99Ms(const std::string& stage) const;
+  double maxMs(const std::string& stage) const;
   /// Stage names in first-seen order ("total" last).
   std::vector<std::string> stages() const;
-  /// {stage: {mean_ms, p95_ms, max_ms}} for the run report.
+  /// {stage: {mean_ms, p95_ms, p99_ms, max_ms, samples}} for the run report.
   Json toJson() const;
   /// Aligned text table for the terminal.
   std::string table() const;

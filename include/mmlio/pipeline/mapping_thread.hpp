@@ -1,0 +1,51 @@
+#pragma once
+// The mapping back end off the odometry's critical path: sweeps go to a MappingBackend on its own
+// thread through a bounded queue. Loop search, ICP verification, pose-graph optimisation and
+// submap bookkeeping then overlap with the next sweeps' odometry instead of delaying them.
+//
+// Deterministic by construction: the back end's results never feed back into the odometry, and it
+// sees the same sweeps in the same order whatever the timing. A full queue blocks the producer
+// (an offline run loses nothing; the queue bounds the memory a slow back end can hold).
+#include <condition_variable>
+#include <deque>
+#include <exception>
+#include <mutex>
+#include <thread>
+
+#include "mmlio/pipeline/mapping_backend.hpp"
+#include "mmlio/pipeline/stage_stats.hpp"
+
+namespace mmlio::pipeline {
+
+class MappingThread {
+ public:
+  explicit MappingThread(MappingBackend::Config cfg, std::size_t capacity = 16);
+  ~MappingThread();
+  MappingThread(const MappingThread&) = delete;
+  MappingThread& operator=(const MappingThread&) = delete;
+
+  /// Queues a tracked sweep (blocks while the queue is full).
+  void addSweep(estimator::SweepResult sweep);
+  /// Waits until every queued sweep is processed, stops the thread and runs the back end's final
+  /// loop check. Rethrows what the back end threw. The back end may be read afterwards.
+  MappingBackend& finish();
+  /// The back end itself; read it only after finish() (also when finish() threw).
+  MappingBackend& backend() { return backend_; }
+  /// Milliseconds the back end spent per sweep (on its own thread).
+  const StageStats& timing() const { return timing_; }
+
+ private:
+  void run();
+
+  MappingBackend backend_;
+  std::size_t capacity_;
+  std::deque<estimator::SweepResult> queue_;
+  std::mutex mutex_;
+  std::condition_variable not_empty_, not_full_;
+  bool closing_ = false, finished_ = false;
+  std::exception_ptr error_;
+  StageStats timing_;
+  std::thread worker_;  // last: started once everything above exists
+};
+
+}  // namespace mmlio::pipeline
