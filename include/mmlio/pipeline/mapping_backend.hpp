@@ -38,7 +38,7 @@ class MappingBackend {
     bool clean_map = true;               // drop submap points keyframes saw through (ghosts of movers)
     bool dynamic_map = true;             // keep what was removed as moving (dynamicMap)
     double ghost_range_m = 20.0;         // keyframes judge map points up to this far from a LiDAR
-    int ghost_keyframes = 16;            // a submap is judged by the views of this many keyframes
+    int ghost_keyframes = 40;            // a submap is judged by the views of this many keyframes
                                          // before and after its own, once they exist
   };
 
