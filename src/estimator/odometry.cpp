@@ -316,6 +316,8 @@ struct Odometry::Impl {
       if (src->size() == pts->size()) src->resize(k);
       pts->resize(k);
     };
+    for (std::size_t i = 0; i < moved.size(); ++i)
+      if (moved[i]) out->moved_world.push_back(world[i]);
     keep(&f->edges, &f->edge_source);
     keep(&f->planes, &f->plane_source);
     f->map_edges = f->edges;
@@ -331,11 +333,11 @@ struct Odometry::Impl {
   }
 
   /// Local map points the keyframe's sweep saw through were left by something that has gone.
-  std::size_t carveMap(const Eigen::Vector3d& center) {
+  std::size_t carveMap(const Eigen::Vector3d& center, std::vector<Eigen::Vector3d>* carved) {
     if (!view) return 0;
     const auto seen_through = [this](const Eigen::Vector3d& p) { return view->seesThrough(p); };
-    return plane_map.removeIf(center, cfg.dynamic.carve_radius_m, seen_through) +
-           edge_map.removeIf(center, cfg.dynamic.carve_radius_m, seen_through);
+    return plane_map.removeIf(center, cfg.dynamic.carve_radius_m, seen_through, carved) +
+           edge_map.removeIf(center, cfg.dynamic.carve_radius_m, seen_through, carved);
   }
 
   bool isKeyframe(const NavState& s) const {
@@ -483,7 +485,7 @@ SweepResult Odometry::process(const lidar::AlignedSweep& sweep) {
     state = fromBlocks(d.window.back().x, state.stamp_ns);
     if (d.view) {
       d.view->place(state.pose());
-      out.carved_points = d.carveMap(state.p_world);
+      out.carved_points = d.carveMap(state.p_world, &out.moved_world);
     }
     d.pre_since_keyframe = std::make_shared<imu::Preintegration>(state.bias, d.cfg.imu_noise);
     ++d.keyframes;

@@ -31,26 +31,30 @@ double elevationOf(const Eigen::Vector3d& p) { return fastAtan2(p.z(), std::hypo
 RangeImage::RangeImage(const std::vector<Point>& points, const RangeImageConfig& config) : cfg_(config) {
   inv_res_ = 1.0 / std::max(0.05, cfg_.resolution_deg);
   cols_ = std::max(1, static_cast<int>(std::ceil(360.0 * inv_res_)));
+  // One pass computes every return's pixel (rows relative to row 0 until the image's rows are known).
+  struct Cell {
+    int col, row;
+    std::uint16_t cm;
+  };
+  thread_local std::vector<Cell> cells;
+  cells.clear();
+  cells.reserve(points.size());
   int lo = std::numeric_limits<int>::max(), hi = std::numeric_limits<int>::min();
-  for (const Point& p : points) {
-    const Eigen::Vector3d v = p.xyz.cast<double>();
-    const double r = v.norm();
-    if (!(r > 1e-3) || !std::isfinite(r)) continue;
-    const int row = rowOf(elevationOf(v), inv_res_);
-    lo = std::min(lo, row);
-    hi = std::max(hi, row);
-  }
-  if (lo > hi) return;
-  row0_ = lo;
-  rows_ = hi - lo + 1;
-  ranges_.assign(static_cast<std::size_t>(rows_) * static_cast<std::size_t>(cols_), 0);
   for (const Point& p : points) {
     int col, row;
     const Eigen::Vector3d v = p.xyz.cast<double>();
-    if (!pixelOf(v, &col, &row) || row < 0 || row >= rows_) continue;
-    std::uint16_t& cell = ranges_[static_cast<std::size_t>(row) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(col)];
-    const auto cm = static_cast<std::uint16_t>(std::clamp(std::lround(v.norm() * 100.0), 1L, 65535L));
-    if (cell == 0 || cm < cell) cell = cm;
+    if (!pixelOf(v, &col, &row)) continue;
+    lo = std::min(lo, row);
+    hi = std::max(hi, row);
+    cells.push_back({col, row, static_cast<std::uint16_t>(std::clamp(std::lround(v.norm() * 100.0), 1L, 65535L))});
+  }
+  if (cells.empty()) return;
+  row0_ = lo;
+  rows_ = hi - lo + 1;
+  ranges_.assign(static_cast<std::size_t>(rows_) * static_cast<std::size_t>(cols_), 0);
+  for (const Cell& c : cells) {
+    std::uint16_t& cell = ranges_[static_cast<std::size_t>(c.row - lo) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(c.col)];
+    if (cell == 0 || c.cm < cell) cell = c.cm;
   }
 }
 

@@ -59,23 +59,28 @@ void VoxelHashMap::removeFarFrom(const Eigen::Vector3d& center, double radius_m)
 }
 
 std::size_t VoxelHashMap::removeIf(const Eigen::Vector3d& center, double radius_m,
-                                  const std::function<bool(const Eigen::Vector3d&)>& remove) {
+                                  const std::function<bool(const Eigen::Vector3d&)>& remove,
+                                  std::vector<Eigen::Vector3d>* removed_points) {
   const double reach = radius_m + std::sqrt(3.0) * voxel_m_;
   std::vector<std::vector<Eigen::Vector3d>*> near;
   for (auto& [key, bucket] : voxels_)
     if (!bucket.empty() && (bucket.front() - center).squaredNorm() <= reach * reach) near.push_back(&bucket);
-  std::vector<std::size_t> removed(near.size(), 0);
+  std::vector<std::vector<Eigen::Vector3d>> removed(near.size());
   const double r2 = radius_m * radius_m;
   tbb::parallel_for(std::size_t(0), near.size(), [&](std::size_t i) {
     auto& bucket = *near[i];
-    const auto end = std::remove_if(bucket.begin(), bucket.end(), [&](const Eigen::Vector3d& p) {
-      return (p - center).squaredNorm() <= r2 && remove(p);
-    });
-    removed[i] = static_cast<std::size_t>(bucket.end() - end);
-    bucket.erase(end, bucket.end());
+    std::size_t kept = 0;
+    for (const Eigen::Vector3d& p : bucket) {
+      if ((p - center).squaredNorm() <= r2 && remove(p)) removed[i].push_back(p);
+      else bucket[kept++] = p;
+    }
+    bucket.resize(kept);
   });
   std::size_t total = 0;
-  for (std::size_t n : removed) total += n;
+  for (const auto& r : removed) {
+    total += r.size();
+    if (removed_points) removed_points->insert(removed_points->end(), r.begin(), r.end());
+  }
   if (total == 0) return 0;
   num_points_ -= total;
   bool erased = false;

@@ -11,6 +11,19 @@
 
 namespace mmlio::pipeline {
 
+namespace {
+
+constexpr double kMovedCellM = 0.5;
+
+std::uint64_t cellKey(const Eigen::Vector3d& p, int dx = 0, int dy = 0, int dz = 0) {
+  const auto axis = [](double v, int d) {
+    return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(v / kMovedCellM)) + d + (1 << 20)) & 0x1FFFFFu;
+  };
+  return (axis(p.x(), dx) << 42) | (axis(p.y(), dy) << 21) | axis(p.z(), dz);
+}
+
+}  // namespace
+
 MappingBackend::MappingBackend(Config cfg) : cfg_(std::move(cfg)), dynamic_(cfg_.map_leaf_m) {
   if (cfg_.loop_enabled) closer_ = std::make_unique<backend::LoopCloser>(cfg_.loop);
 }
@@ -94,6 +107,10 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
     if (closer_ && k > 0 && k % std::max(1, cfg_.loop_check_every) == 0) tryLoop(k);
   }
   if (cfg_.dynamic_map && !sweep.points_dynamic_body.empty()) dynamic_.add(sweep.points_dynamic_body, T_world_body);
+  if (cfg_.clean_map)
+    for (const Eigen::Vector3d& p : sweep.moved_world)
+      if (moved_cores_.insert(cellKey(p)).second)
+        for (int n = 0; n < 27; ++n) moved_cells_.insert(cellKey(p, n % 3 - 1, (n / 3) % 3 - 1, n / 9 - 1));
   // Points go into the current keyframe's submap, in that keyframe's frame. The odometry lists
   // points_body LiDAR by LiDAR, in the order of sweep.lidars.
   const std::size_t stride = static_cast<std::size_t>(std::max(1, cfg_.map_point_stride));
@@ -184,6 +201,8 @@ void MappingBackend::judgeSubmaps(bool all) {
   while (!views_.empty() && views_.begin()->first + after < judged_) views_.erase(views_.begin());
 }
 
+bool MappingBackend::nearMoved(const Eigen::Vector3d& world) const { return moved_cells_.count(cellKey(world)) > 0; }
+
 void MappingBackend::removeGhosts(std::size_t submap) {
   // One vote per keyframe (its LiDARs together): seen through by any of them, else seen on.
   struct Eye {
@@ -211,6 +230,7 @@ void MappingBackend::removeGhosts(std::size_t submap) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 512), [&](const tbb::blocked_range<std::size_t>& r) {
       for (std::size_t i = r.begin(); i < r.end(); ++i) {
         const Eigen::Vector3d p = T_world_keyframe * points[i].xyz.cast<double>();
+        if (!nearMoved(p)) continue;
         // Votes of the keyframes whose index modulo `stride` is `phase` (stride 1: all of them).
         const auto vote = [&](std::size_t stride, int* free, int* hit) {
           for (std::size_t e = 0; e < eyes.size();) {

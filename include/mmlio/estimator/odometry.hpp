@@ -91,6 +91,9 @@ struct SweepResult {
   std::vector<Point> points_dynamic_body;  // ... those on things that moved in (left out of points_body)
   std::size_t dynamic_points = 0;       // feature points rejected as moved in (registration, window, map)
   std::size_t carved_points = 0;        // local map points this sweep saw through (keyframes)
+  // World positions where something moved this sweep: rejected features (with their neighbours)
+  // and carved local-map points. The map's ghost removal judges only near these.
+  std::vector<Eigen::Vector3d> moved_world;
   std::shared_ptr<const SweepView> view;  // what each LiDAR saw, placed at the final state (dynamic.enabled)
   std::string note;                     // why degraded
   StageTimes times_ms;

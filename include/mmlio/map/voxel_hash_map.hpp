@@ -20,9 +20,11 @@ class VoxelHashMap {
   /// Drops every voxel whose first point lies farther than radius_m from center.
   void removeFarFrom(const Eigen::Vector3d& center, double radius_m);
   /// Removes the points within radius_m of center for which `remove` is true (called in
-  /// parallel, so it must be thread-safe). Returns how many were removed.
+  /// parallel, so it must be thread-safe), appending them to *removed if given. Returns how many
+  /// were removed.
   std::size_t removeIf(const Eigen::Vector3d& center, double radius_m,
-                       const std::function<bool(const Eigen::Vector3d&)>& remove);
+                       const std::function<bool(const Eigen::Vector3d&)>& remove,
+                       std::vector<Eigen::Vector3d>* removed = nullptr);
 
   /// The (up to) k nearest points within max_dist_m of q, sorted by distance, into *out (cleared).
   /// Exact: scans the 27 voxels around q, then further rings until no closer point can exist.

@@ -96,6 +96,10 @@ class MappingBackend {
   // Keyframe views still needed by a submap not yet judged, by keyframe index (may be null).
   std::map<std::size_t, std::shared_ptr<const estimator::SweepView>> views_;
   std::size_t judged_ = 0;  // submaps [0, judged_) are judged
+  // World cells (and their neighbours) where the odometry saw something move: only map points in
+  // them are judged (nearly all of a map is static and never near a mover).
+  std::unordered_set<std::uint64_t> moved_cells_, moved_cores_;
+  bool nearMoved(const Eigen::Vector3d& world) const;
   GhostRemoval ghosts_;
   MapAccumulator dynamic_{0.05};
   Trajectory odometry_;
