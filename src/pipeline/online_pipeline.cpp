@@ -21,6 +21,7 @@ OnlinePipeline::OnlinePipeline(const io::RigConfig& cfg, const std::string& mode
 }
 
 void OnlinePipeline::addImu(const ImuSample& sample) {
+  if (!imu_gate_.accept(sample)) return;
   odometry_.addImu(sample);
   drain(false);
 }

@@ -140,7 +140,14 @@ RunResult runBag(const RunOptions& options) {
   // ---- report ----
   Json& rep = result.report;
   rep = Json::object();
-  rep["status"] = result.complete ? "complete" : "incomplete: " + result.error;
+  const ImuGate::Counts& imu_dropped = online.imuGate().counts();
+  if (imu_dropped.total() > 0)
+    log::warn("IMU: ", imu_dropped.total(), " samples dropped (non-finite ", imu_dropped.non_finite, ", beyond range ",
+              imu_dropped.out_of_range, ", out of order ", imu_dropped.out_of_order, ", stamp jumps ", imu_dropped.jumped,
+              ")");
+  rep["status"] = !result.complete ? "incomplete: " + result.error
+                  : imu_dropped.total() > 0 ? std::string("degraded: IMU samples dropped (see input.imu_dropped)")
+                                            : std::string("complete");
   Json input = Json::object();
   input["bag"] = options.bag_path;
   input["config"] = cfg.source_path;
@@ -149,6 +156,12 @@ RunResult runBag(const RunOptions& options) {
   input["imu_messages"] = source.imuCount();
   input["imu_acc_scale"] = source.accScale();
   input["skipped_messages"] = source.skippedMessages();
+  Json imu_gate = Json::object();
+  imu_gate["non_finite"] = imu_dropped.non_finite;
+  imu_gate["beyond_range"] = imu_dropped.out_of_range;
+  imu_gate["out_of_order"] = imu_dropped.out_of_order;
+  imu_gate["stamp_jumps"] = imu_dropped.jumped;
+  input["imu_dropped"] = imu_gate;
   input["truncated"] = source.truncated();
   Json lidars_in = Json::object();
   for (const auto& [name, st] : source.stats()) {

@@ -20,8 +20,8 @@ inline io::RigConfig simRigConfig(const sim::Simulator& sim) {
   return cfg;
 }
 
-inline void replay(const sim::Simulator& sim, pipeline::OnlinePipeline& pipeline) {
-  const auto& imu = sim.imu();
+/// Replays the simulator's LiDARs with these IMU samples (default: the simulator's own).
+inline void replay(const sim::Simulator& sim, pipeline::OnlinePipeline& pipeline, const std::vector<ImuSample>& imu) {
   std::size_t i = 0;
   int v = 0, l = 0;
   const int nv = sim.numVelodyneSweeps(), nl = sim.numLivoxFrames();
@@ -46,5 +46,7 @@ inline void replay(const sim::Simulator& sim, pipeline::OnlinePipeline& pipeline
   }
   pipeline.flush();
 }
+
+inline void replay(const sim::Simulator& sim, pipeline::OnlinePipeline& pipeline) { replay(sim, pipeline, sim.imu()); }
 
 }  // namespace mmlio::testing

@@ -10,6 +10,7 @@
 #include "mmlio/estimator/odometry.hpp"
 #include "mmlio/io/rig_config.hpp"
 #include "mmlio/lidar/sweep_aligner.hpp"
+#include "mmlio/pipeline/imu_gate.hpp"
 
 namespace mmlio::pipeline {
 
@@ -27,6 +28,8 @@ class OnlinePipeline {
   void flush();
 
   const estimator::Odometry& odometry() const { return odometry_; }
+  /// What the IMU check dropped before the estimator.
+  const ImuGate& imuGate() const { return imu_gate_; }
   std::size_t sweepsProcessed() const { return processed_; }
 
  private:
@@ -35,6 +38,7 @@ class OnlinePipeline {
   std::map<std::string, double> offset_s_;
   lidar::SweepAligner aligner_;
   estimator::Odometry odometry_;
+  ImuGate imu_gate_;
   std::deque<lidar::AlignedSweep> pending_;
   SweepCallback on_sweep_;
   std::size_t processed_ = 0;

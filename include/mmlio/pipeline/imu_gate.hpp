@@ -1,0 +1,43 @@
+#pragma once
+// IMU samples are checked before they reach the estimator. One corrupt value (a NaN, or random
+// bytes read as 1.8e109 m/s^2) would otherwise poison every pose after it, and one stamp far in the
+// future would make every later sample look out of order. Dropped and counted: non-finite values,
+// values beyond any MEMS IMU's range, stamps not after the last accepted sample (duplicates, out of
+// order), and stamps that jump far ahead of it (kept out until the stream comes back near it).
+// The first drop of each kind is logged; the report carries the counts.
+#include <cstddef>
+#include <limits>
+
+#include "mmlio/core/types.hpp"
+
+namespace mmlio::pipeline {
+
+class ImuGate {
+ public:
+  struct Config {
+    double max_acc_m_s2 = 50.0 * 9.80665;  // 50 g: beyond every MEMS IMU's range
+    double max_gyro_rad_s = 50.0;
+    double max_jump_s = 1.0;               // a later stamp further ahead than this is rejected ...
+    int jump_confirmations = 20;           // ... unless this many samples in a row agree (a real gap)
+  };
+  struct Counts {
+    std::size_t non_finite = 0, out_of_range = 0, out_of_order = 0, jumped = 0;
+    std::size_t total() const { return non_finite + out_of_range + out_of_order + jumped; }
+  };
+
+  ImuGate() = default;
+  explicit ImuGate(Config config) : cfg_(config) {}
+
+  /// True if the sample may reach the estimator.
+  bool accept(const ImuSample& sample);
+  const Counts& counts() const { return counts_; }
+
+ private:
+  Config cfg_;
+  Counts counts_;
+  Stamp last_ns_ = std::numeric_limits<Stamp>::min();
+  Stamp jump_ns_ = 0;   // the stamp a run of jumped samples started at
+  int jump_run_ = 0;    // how many consecutive samples agreed on the jump
+};
+
+}  // namespace mmlio::pipeline

@@ -1,0 +1,32 @@
+#include "mmlio/pipeline/imu_gate.hpp"
+
+#include "mmlio/core/log.hpp"
+
+namespace mmlio::pipeline {
+
+bool ImuGate::accept(const ImuSample& s) {
+  const auto drop = [&](std::size_t* count, const char* why) {
+    if ((*count)++ == 0)
+      log::warn("IMU sample at ", toSec(s.stamp_ns), " s dropped: ", why, " (further ones are counted in the report)");
+    return false;
+  };
+  if (!s.acc_m_s2.allFinite() || !s.gyro_rad_s.allFinite()) return drop(&counts_.non_finite, "non-finite value");
+  if (s.acc_m_s2.norm() > cfg_.max_acc_m_s2 || s.gyro_rad_s.norm() > cfg_.max_gyro_rad_s)
+    return drop(&counts_.out_of_range, "beyond any IMU's range (50 g, 50 rad/s)");
+  if (last_ns_ != std::numeric_limits<Stamp>::min()) {
+    if (s.stamp_ns <= last_ns_) return drop(&counts_.out_of_order, "stamp not after the previous sample");
+    if (s.stamp_ns - last_ns_ > fromSec(cfg_.max_jump_s)) {
+      // A lone stamp far ahead is corrupt; a stream that stays there had a real gap.
+      const bool continues = jump_run_ > 0 && s.stamp_ns > jump_ns_ && s.stamp_ns - jump_ns_ < fromSec(cfg_.max_jump_s);
+      jump_run_ = continues ? jump_run_ + 1 : 1;
+      jump_ns_ = s.stamp_ns;
+      if (jump_run_ < cfg_.jump_confirmations) return drop(&counts_.jumped, "stamp jumps far ahead of the stream");
+      log::warn("IMU stream resumed ", toSec(s.stamp_ns - last_ns_), " s after the last accepted sample");
+    }
+  }
+  jump_run_ = 0;
+  last_ns_ = s.stamp_ns;
+  return true;
+}
+
+}  // namespace mmlio::pipeline

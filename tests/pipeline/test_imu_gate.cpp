@@ -1,0 +1,80 @@
+// Corrupt IMU samples are dropped before the estimator: one NaN, one value of 1.8e109 (random bytes
+// read as a double) or one stamp in the year 2106 must not poison the poses after it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "mmlio/eval/evaluation.hpp"
+#include "mmlio/pipeline/imu_gate.hpp"
+#include "sim_feed.hpp"
+
+namespace mmlio {
+namespace {
+
+ImuSample at(double t_s) {
+  ImuSample s;
+  s.stamp_ns = fromSec(100.0 + t_s);
+  s.acc_m_s2 = Eigen::Vector3d(0, 0, 9.81);
+  return s;
+}
+
+}  // namespace
+
+TEST(ImuGate, DropsAndCountsNonFiniteImpossibleAndDisorderedSamples) {
+  pipeline::ImuGate gate;
+  EXPECT_TRUE(gate.accept(at(0.000)));
+  ImuSample nan = at(0.005);
+  nan.gyro_rad_s.x() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(gate.accept(nan));
+  ImuSample huge = at(0.010);
+  huge.acc_m_s2.y() = 1.8e109;
+  EXPECT_FALSE(gate.accept(huge));
+  EXPECT_TRUE(gate.accept(at(0.015)));
+  EXPECT_FALSE(gate.accept(at(0.015)));  // duplicate
+  EXPECT_FALSE(gate.accept(at(0.012)));  // out of order
+  EXPECT_FALSE(gate.accept(at(86.0 * 365 * 86400)));  // one stamp decades ahead ...
+  EXPECT_TRUE(gate.accept(at(0.020)));   // ... does not block the stream that follows
+  EXPECT_EQ(gate.counts().non_finite, 1u);
+  EXPECT_EQ(gate.counts().out_of_range, 1u);
+  EXPECT_EQ(gate.counts().out_of_order, 2u);
+  EXPECT_EQ(gate.counts().jumped, 1u);
+}
+
+TEST(ImuGate, AStreamThatStaysAfterAGapIsAcceptedAgainAfterAFewSamples) {
+  pipeline::ImuGate gate;
+  for (int k = 0; k < 10; ++k) EXPECT_TRUE(gate.accept(at(0.005 * k)));
+  int accepted = 0;
+  for (int k = 0; k < 100; ++k) accepted += gate.accept(at(3.0 + 0.005 * k));  // 3 s later, for good
+  EXPECT_EQ(gate.counts().jumped, 19u);  // until 20 samples agree
+  EXPECT_EQ(accepted, 81);
+}
+
+TEST(ImuGate, OneCorruptSampleLeavesTheTrajectoryAsGoodAsTheCleanRun) {
+  sim::SimOptions so;
+  so.scenario = "office";
+  so.duration_s = 12.0;
+  const sim::Simulator sim(so);
+  const io::RigConfig cfg = testing::simRigConfig(sim);
+  const auto run = [&](const std::vector<ImuSample>& imu) {
+    Trajectory trajectory;
+    pipeline::OnlinePipeline online(cfg, "hvi", [&](const estimator::SweepResult& r) {
+      if (r.status != estimator::SweepResult::Status::kInitializing) trajectory.push_back({r.state.stamp_ns, r.state.pose()});
+    });
+    testing::replay(sim, online, imu);
+    return trajectory;
+  };
+  const Trajectory clean = run(sim.imu());
+  std::vector<ImuSample> bad = sim.imu();
+  bad[1200].gyro_rad_s.x() = std::numeric_limits<double>::quiet_NaN();  // moving, 6 s in
+  bad[1400].acc_m_s2.z() = 1.8e109;
+  bad[1600].stamp_ns += fromSec(4e9);  // the year 2106
+  const Trajectory faulty = run(bad);
+  ASSERT_EQ(faulty.size(), clean.size());
+  for (const auto& p : faulty) ASSERT_TRUE(p.T_world_body.matrix().allFinite());
+  const double clean_ate = eval::evaluate(sim.groundTruth(), clean).ate_rmse_m;
+  const double faulty_ate = eval::evaluate(sim.groundTruth(), faulty).ate_rmse_m;
+  EXPECT_LT(faulty_ate, 1.2 * clean_ate + 0.002) << "clean " << clean_ate;
+}
+
+}  // namespace mmlio
