@@ -1,4 +1,6 @@
 // mmlio run BAG: the main job, bag in -> trajectory, map and report out.
+#include <atomic>
+#include <csignal>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -43,6 +45,13 @@ void applyCalibrationSource(io::RigConfig& cfg, const std::string& calib_overrid
   log::emit(log::Level::kInfo, "extrinsics and clock offsets from ", source);
 }
 
+std::atomic<bool> g_stop{false};
+
+extern "C" void onStopSignal(int signal) {
+  g_stop = true;
+  std::signal(signal, SIG_DFL);  // a second Ctrl-C ends the process at once
+}
+
 void run(const RunArgs& a) {
   io::RigConfig cfg;
   if (a.config.empty()) {
@@ -61,13 +70,19 @@ void run(const RunArgs& a) {
   options.progress = !a.no_progress;
   options.gt_path = a.gt;
   options.max_duration_s = a.duration_s;
+  options.stop = &g_stop;
+  std::signal(SIGINT, onStopSignal);
+  std::signal(SIGTERM, onStopSignal);
   const pipeline::RunResult r = pipeline::runBag(options);
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
 
   std::cout << "trajectory: " << a.out << "/trajectory.tum (" << r.trajectory.size() << " poses)\n"
             << "map:        " << a.out << "/map.pcd (" << r.map_points << " points)\n"
             << "report:     " << a.out << "/report.json, " << a.out << "/report.md\n\n"
             << r.timing.table();
   if (!r.complete) throw Error("bag ended early (" + r.error + "); outputs hold the poses computed before it");
+  if (r.interrupted) throw Error("interrupted; outputs hold the poses computed before it");
 }
 
 }  // namespace

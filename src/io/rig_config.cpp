@@ -1,5 +1,6 @@
 #include "mmlio/io/rig_config.hpp"
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -197,11 +198,13 @@ class Checker {
   }
   template <typename T>
   void positive(T value, const std::string& key_path) const {
-    require(value > T(0), key_path, "must be > 0, got " + toString(value));
+    require(std::isfinite(static_cast<double>(value)) && value > T(0), key_path,
+            "must be a finite number > 0, got " + toString(value));
   }
   template <typename T>
   void nonNegative(T value, const std::string& key_path) const {
-    require(value >= T(0), key_path, "must be >= 0, got " + toString(value));
+    require(std::isfinite(static_cast<double>(value)) && value >= T(0), key_path,
+            "must be a finite number >= 0, got " + toString(value));
   }
 
  private:

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -37,8 +38,28 @@ Json vec3(const Eigen::Vector3d& v) {
 
 }  // namespace
 
+namespace {
+
+// Found before hours of work, not after: the output folder exists (or is created) and takes a file.
+void checkWritable(const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  fs::create_directories(dir, error);
+  if (!fs::is_directory(dir, error))
+    throw Error("cannot create output directory '" + dir + "'" + (error ? ": " + error.message() : std::string()));
+  const fs::path probe = fs::path(dir) / ".mmlio-write-test";
+  {
+    std::ofstream out(probe);
+    if (!(out << "ok")) throw Error("cannot write to output directory '" + dir + "'");
+  }
+  fs::remove(probe, error);
+}
+
+}  // namespace
+
 RunResult runBag(const RunOptions& options) {
   const io::RigConfig& cfg = options.config;
+  if (!options.out_dir.empty()) checkWritable(options.out_dir);
   const std::string mode = options.mode.empty() ? cfg.mode : options.mode;
   if (!io::isValidMode(mode)) throw Error("unknown mode '" + mode + "' (expected hvi, vi or hi)");
 
@@ -93,7 +114,7 @@ RunResult runBag(const RunOptions& options) {
       if (replay > 0) again = std::make_unique<io::BagSource>(options.bag_path, io::bagSourceOptions(cfg, mode));
       io::BagSource& src = replay > 0 ? *again : source;
       const Stamp shift = replay * period_ns;
-      while (src.next(&event)) {
+      while (!(options.stop && options.stop->load()) && src.next(&event)) {
         if (event.kind == io::SensorEvent::Kind::kImu) {
           event.imu.stamp_ns += shift;
           if (event.imu.stamp_ns > stop_ns) break;
@@ -113,7 +134,9 @@ RunResult runBag(const RunOptions& options) {
         }
       }
     }
-    online.flush();
+    result.interrupted = options.stop && options.stop->load();
+    if (result.interrupted) log::warn("interrupted: writing the trajectory, map and report computed so far");
+    else online.flush();  // an interrupted run's last sweeps may lack IMU: they are left out
   } catch (const Error& e) {
     if (result.trajectory.empty()) throw;
     result.complete = false;
@@ -146,6 +169,7 @@ RunResult runBag(const RunOptions& options) {
               imu_dropped.out_of_range, ", out of order ", imu_dropped.out_of_order, ", stamp jumps ", imu_dropped.jumped,
               ")");
   rep["status"] = !result.complete ? "incomplete: " + result.error
+                  : result.interrupted ? std::string("interrupted")
                   : imu_dropped.total() > 0 ? std::string("degraded: IMU samples dropped (see input.imu_dropped)")
                                             : std::string("complete");
   Json input = Json::object();

@@ -239,7 +239,7 @@ TEST(Validation, BadValuesAreErrorsNamingTheKey) {
   EXPECT_ERROR_CONTAINS(parseRigConfig("mode: lio\n", "r.yaml"), "r.yaml: mode: must be hvi, vi or hi");
   EXPECT_ERROR_CONTAINS(parseRigConfig("imu: {acc_unit: mg}\n", "r.yaml"), "imu.acc_unit");
   EXPECT_ERROR_CONTAINS(parseRigConfig("odometry: {edge_voxel_m: -0.1}\n", "r.yaml"),
-                        "odometry.edge_voxel_m: must be > 0, got -0.1");
+                        "odometry.edge_voxel_m: must be a finite number > 0, got -0.1");
   EXPECT_ERROR_CONTAINS(parseRigConfig("loop: {min_overlap: 1.5}\n", "r.yaml"), "loop.min_overlap");
   EXPECT_ERROR_CONTAINS(parseRigConfig("reference_lidar: ouster\n", "r.yaml"),
                         "reference_lidar: 'ouster' is not one of the lidars (velodyne, livox)");
@@ -390,3 +390,14 @@ TEST(Calibration, MalformedFilesAreErrorsNamingThePath) {
                           "  time_offset_s: soon\n");
   EXPECT_ERROR_CONTAINS(readCalibration(bad_offset), "sensor 'velodyne': time_offset_s: expected a number");
 }
+
+namespace mmlio::io {
+
+TEST(Validation, InfiniteOrNanSizesAreRefusedNamingTheKey) {
+  EXPECT_ERROR_CONTAINS(parseRigConfig("output:\n  map_voxel_m: .inf\n", "rig.yaml"),
+                        "output.map_voxel_m: must be a finite number >= 0, got inf");
+  EXPECT_ERROR_CONTAINS(parseRigConfig("odometry:\n  plane_voxel_m: .nan\n", "rig.yaml"),
+                        "odometry.plane_voxel_m: must be a finite number > 0");
+}
+
+}  // namespace mmlio::io

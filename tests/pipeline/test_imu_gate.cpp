@@ -3,10 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 
 #include "mmlio/eval/evaluation.hpp"
+#include "mmlio/core/error.hpp"
 #include "mmlio/pipeline/imu_gate.hpp"
+#include "mmlio/pipeline/runner.hpp"
 #include "sim_feed.hpp"
 
 namespace mmlio {
@@ -78,3 +82,22 @@ TEST(ImuGate, OneCorruptSampleLeavesTheTrajectoryAsGoodAsTheCleanRun) {
 }
 
 }  // namespace mmlio
+
+namespace mmlio::pipeline {
+
+TEST(RunBag, AnUnwritableOutputFolderIsRefusedBeforeTheBagIsRead) {
+  const std::filesystem::path file = std::filesystem::temp_directory_path() / "mmlio_not_a_folder";
+  { std::ofstream(file) << "x"; }
+  RunOptions options;
+  options.bag_path = "/nonexistent.bag";  // never opened: the output is checked first
+  options.out_dir = (file / "out").string();
+  try {
+    runBag(options);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("output directory"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(file);
+}
+
+}  // namespace mmlio::pipeline

@@ -6,6 +6,7 @@
 // estimator::Odometry -> trajectory + map accumulator. A failure mid-bag still writes what was
 // computed (marked incomplete in the report) before the error is reported.
 #include <functional>
+#include <atomic>
 #include <string>
 
 #include "mmlio/core/types.hpp"
@@ -25,6 +26,8 @@ struct RunOptions {
   double max_duration_s = 0.0;    // > 0: stop after this much bag time
   int replays = 1;                // > 1: the bag is played this many times back to back, shifted in
                                   // time, as ONE sequence (long-run memory and drift checks)
+  const std::atomic<bool>* stop = nullptr;  // set (e.g. by a signal handler): stop reading, write
+                                            // what was computed, status "interrupted"
 };
 
 struct RunResult {
@@ -34,6 +37,7 @@ struct RunResult {
   Json report;
   std::size_t map_points = 0;
   bool complete = true;           // false: the bag ended in an error after `trajectory`
+  bool interrupted = false;       // options.stop was set: the outputs hold the run so far
   std::string error;
 };
 
