@@ -1,5 +1,7 @@
 #include "mmlio/pipeline/online_pipeline.hpp"
 
+#include "mmlio/core/log.hpp"
+
 #include "mmlio/pipeline/odometry_setup.hpp"
 
 namespace mmlio::pipeline {
@@ -30,6 +32,17 @@ void OnlinePipeline::addScan(LidarScan scan) {
   const auto it = offset_s_.find(scan.sensor);
   if (it == offset_s_.end()) return;
   scan.start_ns += fromSec(it->second);  // t_imu = t_stamp + offset
+  const auto drop = [&](std::size_t* count, const std::string& why) {
+    if ((*count)++ == 0) log::warn(scan.sensor, " scan dropped: ", why, " (further ones are counted in the report)");
+  };
+  const auto last = last_scan_ns_.find(scan.sensor);
+  if (last != last_scan_ns_.end() && scan.start_ns <= last->second)
+    return drop(&scan_drops_.out_of_order, "not after the previous scan of this LiDAR");
+  const Stamp imu_ns = odometry_.lastImuNs();
+  if (imu_ns > 0 && scan.start_ns > imu_ns + fromSec(2.0))
+    return drop(&scan_drops_.ahead_of_imu,
+                "it starts " + std::to_string(toSec(scan.start_ns - imu_ns)) + " s ahead of the IMU stream");
+  last_scan_ns_[scan.sensor] = scan.start_ns;
   aligner_.add(scan);
   drain(false);
 }

@@ -168,10 +168,16 @@ RunResult runBag(const RunOptions& options) {
     log::warn("IMU: ", imu_dropped.total(), " samples dropped (non-finite ", imu_dropped.non_finite, ", beyond range ",
               imu_dropped.out_of_range, ", out of order ", imu_dropped.out_of_order, ", stamp jumps ", imu_dropped.jumped,
               ")");
+  const OnlinePipeline::ScanDrops& scans_dropped = online.scanDrops();
+  const std::size_t scan_drops = scans_dropped.out_of_order + scans_dropped.ahead_of_imu;
+  if (scan_drops > 0)
+    log::warn("LiDAR: ", scan_drops, " scans dropped (out of order ", scans_dropped.out_of_order, ", ahead of the IMU ",
+              scans_dropped.ahead_of_imu, ")");
   rep["status"] = !result.complete ? "incomplete: " + result.error
                   : result.interrupted ? std::string("interrupted")
-                  : imu_dropped.total() > 0 ? std::string("degraded: IMU samples dropped (see input.imu_dropped)")
-                                            : std::string("complete");
+                  : imu_dropped.total() + scan_drops > 0
+                      ? std::string("degraded: samples or scans dropped (see input.imu_dropped, input.scans_dropped)")
+                      : std::string("complete");
   Json input = Json::object();
   input["bag"] = options.bag_path;
   input["config"] = cfg.source_path;
@@ -186,6 +192,10 @@ RunResult runBag(const RunOptions& options) {
   imu_gate["out_of_order"] = imu_dropped.out_of_order;
   imu_gate["stamp_jumps"] = imu_dropped.jumped;
   input["imu_dropped"] = imu_gate;
+  Json scans_gate = Json::object();
+  scans_gate["out_of_order"] = scans_dropped.out_of_order;
+  scans_gate["ahead_of_imu"] = scans_dropped.ahead_of_imu;
+  input["scans_dropped"] = scans_gate;
   input["truncated"] = source.truncated();
   Json lidars_in = Json::object();
   for (const auto& [name, st] : source.stats()) {

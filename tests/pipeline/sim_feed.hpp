@@ -2,6 +2,7 @@
 // Test helper: replays a simulated sequence into the streaming pipeline in bag order
 // (IMU by stamp, LiDAR scans by their start stamp), as `mmlio run` would see it.
 #include <algorithm>
+#include <functional>
 
 #include "mmlio/io/rig_config.hpp"
 #include "mmlio/pipeline/online_pipeline.hpp"
@@ -20,8 +21,14 @@ inline io::RigConfig simRigConfig(const sim::Simulator& sim) {
   return cfg;
 }
 
-/// Replays the simulator's LiDARs with these IMU samples (default: the simulator's own).
-inline void replay(const sim::Simulator& sim, pipeline::OnlinePipeline& pipeline, const std::vector<ImuSample>& imu) {
+/// Replays the simulator's data in stamp order, as a bag stores it. `edit` may corrupt a scan (by
+/// its index among all scans fed) and `edit_imu` an IMU sample (by index) just before it is fed,
+/// after the order was decided: a corrupt header stamp does not move a message in a bag.
+inline void replay(const sim::Simulator& sim, pipeline::OnlinePipeline& pipeline,
+                   const std::function<void(int, LidarScan&)>& edit,
+                   const std::function<void(std::size_t, ImuSample&)>& edit_imu = {}) {
+  const std::vector<ImuSample>& imu = sim.imu();
+  int fed = 0;
   std::size_t i = 0;
   int v = 0, l = 0;
   const int nv = sim.numVelodyneSweeps(), nl = sim.numLivoxFrames();
@@ -35,11 +42,18 @@ inline void replay(const sim::Simulator& sim, pipeline::OnlinePipeline& pipeline
     const Stamp t = std::min({ti, tv, tl});
     if (t == kNever) break;
     if (t == ti) {
-      pipeline.addImu(imu[i++]);
+      ImuSample sample = imu[i];
+      if (edit_imu) edit_imu(i, sample);
+      ++i;
+      pipeline.addImu(sample);
     } else if (t == tv) {
+      if (edit) edit(fed, next_v);
+      ++fed;
       pipeline.addScan(std::move(next_v));
       if (++v < nv) next_v = sim.velodyneSweep(v);
     } else {
+      if (edit) edit(fed, next_l);
+      ++fed;
       pipeline.addScan(std::move(next_l));
       if (++l < nl) next_l = sim.livoxFrame(l);
     }
@@ -47,6 +61,6 @@ inline void replay(const sim::Simulator& sim, pipeline::OnlinePipeline& pipeline
   pipeline.flush();
 }
 
-inline void replay(const sim::Simulator& sim, pipeline::OnlinePipeline& pipeline) { replay(sim, pipeline, sim.imu()); }
+inline void replay(const sim::Simulator& sim, pipeline::OnlinePipeline& pipeline) { replay(sim, pipeline, {}); }
 
 }  // namespace mmlio::testing

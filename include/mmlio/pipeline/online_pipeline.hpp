@@ -30,6 +30,13 @@ class OnlinePipeline {
   const estimator::Odometry& odometry() const { return odometry_; }
   /// What the IMU check dropped before the estimator.
   const ImuGate& imuGate() const { return imu_gate_; }
+  /// LiDAR scans dropped before the sweep aligner: not after the same LiDAR's previous scan, or
+  /// starting far (> 2 s) ahead of the IMU stream (a corrupt stamp would otherwise hold every
+  /// later sweep back).
+  struct ScanDrops {
+    std::size_t out_of_order = 0, ahead_of_imu = 0;
+  };
+  const ScanDrops& scanDrops() const { return scan_drops_; }
   std::size_t sweepsProcessed() const { return processed_; }
 
  private:
@@ -39,6 +46,8 @@ class OnlinePipeline {
   lidar::SweepAligner aligner_;
   estimator::Odometry odometry_;
   ImuGate imu_gate_;
+  ScanDrops scan_drops_;
+  std::map<std::string, Stamp> last_scan_ns_;
   std::deque<lidar::AlignedSweep> pending_;
   SweepCallback on_sweep_;
   std::size_t processed_ = 0;

@@ -1,5 +1,6 @@
-// Corrupt IMU samples are dropped before the estimator: one NaN, one value of 1.8e109 (random bytes
-// read as a double) or one stamp in the year 2106 must not poison the poses after it.
+// Corrupt input is dropped before the estimator: one NaN IMU value, one of 1.8e109 (random bytes read
+// as a double), one IMU or LiDAR stamp in the year 2106 must not poison what comes after it; an
+// unusable output folder is refused before any work.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -54,31 +55,41 @@ TEST(ImuGate, AStreamThatStaysAfterAGapIsAcceptedAgainAfterAFewSamples) {
   EXPECT_EQ(accepted, 81);
 }
 
-TEST(ImuGate, OneCorruptSampleLeavesTheTrajectoryAsGoodAsTheCleanRun) {
+TEST(InputGates, OneCorruptImuSampleOrScanStampLeavesTheTrajectoryAsGoodAsTheCleanRun) {
   sim::SimOptions so;
   so.scenario = "office";
   so.duration_s = 12.0;
   const sim::Simulator sim(so);
   const io::RigConfig cfg = testing::simRigConfig(sim);
-  const auto run = [&](const std::vector<ImuSample>& imu) {
+  const auto run = [&](const std::function<void(int, LidarScan&)>& edit,
+                        const std::function<void(std::size_t, ImuSample&)>& edit_imu) {
     Trajectory trajectory;
     pipeline::OnlinePipeline online(cfg, "hvi", [&](const estimator::SweepResult& r) {
       if (r.status != estimator::SweepResult::Status::kInitializing) trajectory.push_back({r.state.stamp_ns, r.state.pose()});
     });
-    testing::replay(sim, online, imu);
+    testing::replay(sim, online, edit, edit_imu);
     return trajectory;
   };
-  const Trajectory clean = run(sim.imu());
-  std::vector<ImuSample> bad = sim.imu();
-  bad[1200].gyro_rad_s.x() = std::numeric_limits<double>::quiet_NaN();  // moving, 6 s in
-  bad[1400].acc_m_s2.z() = 1.8e109;
-  bad[1600].stamp_ns += fromSec(4e9);  // the year 2106
-  const Trajectory faulty = run(bad);
+  const Trajectory clean = run({}, {});
+  const Trajectory faulty = run({}, [](std::size_t i, ImuSample& s) {
+    if (i == 1200) s.gyro_rad_s.x() = std::numeric_limits<double>::quiet_NaN();  // moving, 6 s in
+    if (i == 1400) s.acc_m_s2.z() = 1.8e109;
+    if (i == 1600) s.stamp_ns += fromSec(4e9);  // the year 2106
+  });
   ASSERT_EQ(faulty.size(), clean.size());
   for (const auto& p : faulty) ASSERT_TRUE(p.T_world_body.matrix().allFinite());
   const double clean_ate = eval::evaluate(sim.groundTruth(), clean).ate_rmse_m;
   const double faulty_ate = eval::evaluate(sim.groundTruth(), faulty).ate_rmse_m;
   EXPECT_LT(faulty_ate, 1.2 * clean_ate + 0.002) << "clean " << clean_ate;
+
+  // One Velodyne sweep stamped in the year 2106: that sweep is lost, tracking goes on.
+  const Trajectory late = run(
+      [](int index, LidarScan& scan) {
+        if ((index == 120 || index == 121) && scan.sensor == "velodyne") scan.start_ns += fromSec(4e9);
+      },
+      {});
+  EXPECT_GE(late.size() + 2, clean.size());
+  EXPECT_LT(eval::evaluate(sim.groundTruth(), late).ate_rmse_m, 1.2 * clean_ate + 0.002);
 }
 
 }  // namespace mmlio
