@@ -10,6 +10,7 @@
 #include <unordered_set>
 
 #include "mmlio/core/log.hpp"
+#include "mmlio/core/so3.hpp"
 #include "mmlio/estimator/imu_factor.hpp"
 #include "mmlio/estimator/lidar_factors.hpp"
 #include "mmlio/estimator/sliding_window.hpp"
@@ -26,6 +27,7 @@ namespace mmlio::estimator {
 namespace {
 
 constexpr std::size_t kMinCorrespondences = 30;
+constexpr Stamp kMaxImuGapNs = 50000000;  // 50 ms: ten samples of a 200 Hz IMU
 // Re-associate after a registration round only if the pose moved more than a tenth of the plane
 // voxel or a tenth of a degree: smaller moves leave the k nearest map points unchanged.
 constexpr double kReassociateRad = 0.1 * M_PI / 180.0;
@@ -53,6 +55,8 @@ struct Odometry::Impl {
   std::vector<char> edge_poor;         // this sweep's solid-state frames the edge count marks bad
   FreeSpaceMemory free_space;
   std::shared_ptr<SweepView> view;     // this sweep's, while it is processed
+  bool in_imu_gap = false;             // the last sweep had no usable IMU
+  Eigen::Vector3d omega_body = Eigen::Vector3d::Zero();  // last sweep's turn rate, rad/s
   ceres::Manifold* pose_manifold = nullptr;  // owned by the problems (kept alive separately)
 
   Impl(OdometryConfig c, std::vector<LidarSetup> l)
@@ -207,15 +211,17 @@ struct Odometry::Impl {
       po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
       ceres::Problem problem(po);
       PoseManifold manifold;
-      problem.AddParameterBlock(xi.pose, 7, &manifold);
       problem.AddParameterBlock(xj.pose, 7, &manifold);
-      problem.AddParameterBlock(xi.speed_bias, 9);
-      problem.AddParameterBlock(xj.speed_bias, 9);
-      problem.SetParameterBlockConstant(xi.pose);
-      // The previous velocity may move a little, so a position correction also corrects it.
-      problem.AddResidualBlock(new SpeedBiasPrior(prev_sb, cfg.prior_sigma_v_m_s, cfg.prior_sigma_ba, cfg.prior_sigma_bg),
-                               nullptr, xi.speed_bias);
-      problem.AddResidualBlock(new ImuFactor(pre, g_world), nullptr, xi.pose, xi.speed_bias, xj.pose, xj.speed_bias);
+      if (pre) {
+        problem.AddParameterBlock(xi.pose, 7, &manifold);
+        problem.AddParameterBlock(xi.speed_bias, 9);
+        problem.AddParameterBlock(xj.speed_bias, 9);
+        problem.SetParameterBlockConstant(xi.pose);
+        // The previous velocity may move a little, so a position correction also corrects it.
+        problem.AddResidualBlock(new SpeedBiasPrior(prev_sb, cfg.prior_sigma_v_m_s, cfg.prior_sigma_ba, cfg.prior_sigma_bg),
+                                 nullptr, xi.speed_bias);
+        problem.AddResidualBlock(new ImuFactor(pre, g_world), nullptr, xi.pose, xi.speed_bias, xj.pose, xj.speed_bias);
+      }
       addMapResiduals(problem, xj.pose, matches, cfg.lidar_sigma_m, cfg.huber_loss_m);
       ceres::Solver::Summary summary;
       ceres::Solve(odometrySolverOptions(std::max(2, cfg.max_iterations / rounds)), &problem, &summary);
@@ -416,8 +422,14 @@ SweepResult Odometry::process(const lidar::AlignedSweep& sweep) {
   predicted.stamp_ns = sweep.end_ns;
   auto pre = std::make_shared<imu::Preintegration>(prev.bias, d.cfg.imu_noise);
   lidar::SweepMotion motion;
+  // A gap in the IMU stream must not be bridged by interpolating across it (a straight line through
+  // two seconds of walking): the sweeps it spans are registered by their LiDARs alone.
+  Stamp widest_gap = 0;
+  for (std::size_t k = 1; k < d.imu.size(); ++k)
+    if (d.imu[k].stamp_ns > prev.stamp_ns && d.imu[k - 1].stamp_ns < sweep.end_ns)
+      widest_gap = std::max(widest_gap, d.imu[k].stamp_ns - d.imu[k - 1].stamp_ns);
   const bool imu_ok = samples.size() >= 2 && samples.front().stamp_ns <= prev.stamp_ns + fromSec(0.02) &&
-                      samples.back().stamp_ns >= sweep.end_ns - fromSec(0.02);
+                      samples.back().stamp_ns >= sweep.end_ns - fromSec(0.02) && widest_gap <= kMaxImuGapNs;
   if (imu_ok) {
     integrateSamples(*pre, samples);
     if (!d.pre_since_keyframe) d.pre_since_keyframe = std::make_shared<imu::Preintegration>(prev.bias, d.cfg.imu_noise);
@@ -437,14 +449,21 @@ SweepResult Odometry::process(const lidar::AlignedSweep& sweep) {
     }
     motion = lidar::SweepMotion(times, poses);
   } else {
-    // No IMU across this sweep (gap or IMU stopped): constant velocity, no de-skew, logged.
-    predicted.p_world += prev.v_world * toSec(sweep.end_ns - prev.stamp_ns);
-    out.note = "no IMU over the sweep: constant-velocity prediction";
+    // No IMU across this sweep (gap or IMU stopped): the last motion goes on (velocity and turn
+    // rate), for the prediction and the de-skew, logged.
+    const double dt = toSec(sweep.end_ns - prev.stamp_ns);
+    predicted.p_world += prev.v_world * dt;
+    predicted.q_world_body = (prev.q_world_body * so3::exp(d.omega_body * dt)).normalized();
+    motion = lidar::SweepMotion::constantTwist(prev.q_world_body.inverse() * prev.v_world, d.omega_body,
+                                               toSec(sweep.end_ns - sweep.start_ns));
+    out.note = "no IMU over the sweep: constant-velocity prediction, LiDAR-only registration";
     // The keyframe preintegration now misses an interval: restart the window (the map stays).
     d.window.clear();
     d.pre_since_keyframe.reset();
-    log::emit(log::Level::kWarn, "no IMU data over the sweep ending at ", toSec(sweep.end_ns), " s");
+    if (!d.in_imu_gap) log::emit(log::Level::kWarn, "no IMU data over the sweep ending at ", toSec(sweep.end_ns),
+                                 " s: LiDAR-only registration until it returns (the report counts degraded sweeps)");
   }
+  d.in_imu_gap = !imu_ok;
   out.times_ms.emplace_back("imu_predict", watch.lapMs());
 
   Features features = d.extract(sweep, motion, &out);
@@ -456,12 +475,14 @@ SweepResult Odometry::process(const lidar::AlignedSweep& sweep) {
   NavState state = predicted;
   bool tracked = true;
   d.rejected_sources = d.edge_poor;  // unless registration judges them by their information
-  if (!d.plane_map.empty() && imu_ok) {
-    out.correspondences = d.registerSweep(features, pre, prev, &state, &out);
+  if (!d.plane_map.empty()) {
+    out.correspondences = d.registerSweep(features, imu_ok ? pre : nullptr, prev, &state, &out);
     if (out.correspondences < kMinCorrespondences) {
       tracked = false;
       state = predicted;
       out.note = "only " + std::to_string(out.correspondences) + " map correspondences: IMU prediction kept";
+    } else if (!imu_ok && sweep.end_ns > prev.stamp_ns) {
+      state.v_world = (state.p_world - prev.p_world) / toSec(sweep.end_ns - prev.stamp_ns);  // what the LiDARs moved
     }
   }
   d.dropRejected(&features);
@@ -501,6 +522,8 @@ SweepResult Odometry::process(const lidar::AlignedSweep& sweep) {
     d.free_space.remember(d.view);
     out.view = d.view;
   }
+  if (tracked && state.stamp_ns > prev.stamp_ns)  // the body's turn rate, for sweeps without IMU
+    d.omega_body = so3::log(prev.q_world_body.inverse() * state.q_world_body) / toSec(state.stamp_ns - prev.stamp_ns);
   d.last = state;
   d.trimImu();
   out.state = state;

@@ -7,6 +7,9 @@
 namespace mmlio::pipeline {
 namespace {
 
+constexpr double kMaxScanJumpS = 2.0;       // a scan further after its LiDAR's previous one ...
+constexpr int kScanJumpConfirmations = 3;   // ... is dropped unless this many in a row agree
+
 lidar::SweepAligner::Config alignerConfig(const io::RigConfig& cfg, const std::string& mode) {
   lidar::SweepAligner::Config c;
   c.reference = io::referenceLidar(cfg, mode).name;
@@ -36,12 +39,20 @@ void OnlinePipeline::addScan(LidarScan scan) {
     if ((*count)++ == 0) log::warn(scan.sensor, " scan dropped: ", why, " (further ones are counted in the report)");
   };
   const auto last = last_scan_ns_.find(scan.sensor);
-  if (last != last_scan_ns_.end() && scan.start_ns <= last->second)
-    return drop(&scan_drops_.out_of_order, "not after the previous scan of this LiDAR");
-  const Stamp imu_ns = odometry_.lastImuNs();
-  if (imu_ns > 0 && scan.start_ns > imu_ns + fromSec(2.0))
-    return drop(&scan_drops_.ahead_of_imu,
-                "it starts " + std::to_string(toSec(scan.start_ns - imu_ns)) + " s ahead of the IMU stream");
+  if (last != last_scan_ns_.end()) {
+    if (scan.start_ns <= last->second) return drop(&scan_drops_.out_of_order, "not after the previous scan of this LiDAR");
+    if (scan.start_ns - last->second > fromSec(kMaxScanJumpS)) {
+      // A lone stamp far ahead is corrupt; a LiDAR that stays there had a real gap.
+      Jump& jump = scan_jumps_[scan.sensor];
+      const bool continues = jump.run > 0 && scan.start_ns > jump.last_ns && scan.start_ns - jump.last_ns < fromSec(1.0);
+      jump.run = continues ? jump.run + 1 : 1;
+      jump.last_ns = scan.start_ns;
+      if (jump.run < kScanJumpConfirmations)
+        return drop(&scan_drops_.jumped, "it starts " + std::to_string(toSec(scan.start_ns - last->second)) +
+                                             " s after this LiDAR's previous scan");
+    }
+  }
+  scan_jumps_[scan.sensor].run = 0;
   last_scan_ns_[scan.sensor] = scan.start_ns;
   aligner_.add(scan);
   drain(false);

@@ -169,10 +169,10 @@ RunResult runBag(const RunOptions& options) {
               imu_dropped.out_of_range, ", out of order ", imu_dropped.out_of_order, ", stamp jumps ", imu_dropped.jumped,
               ")");
   const OnlinePipeline::ScanDrops& scans_dropped = online.scanDrops();
-  const std::size_t scan_drops = scans_dropped.out_of_order + scans_dropped.ahead_of_imu;
+  const std::size_t scan_drops = scans_dropped.out_of_order + scans_dropped.jumped;
   if (scan_drops > 0)
-    log::warn("LiDAR: ", scan_drops, " scans dropped (out of order ", scans_dropped.out_of_order, ", ahead of the IMU ",
-              scans_dropped.ahead_of_imu, ")");
+    log::warn("LiDAR: ", scan_drops, " scans dropped (out of order ", scans_dropped.out_of_order, ", stamp jumps ",
+              scans_dropped.jumped, ")");
   rep["status"] = !result.complete ? "incomplete: " + result.error
                   : result.interrupted ? std::string("interrupted")
                   : imu_dropped.total() + scan_drops > 0
@@ -194,7 +194,7 @@ RunResult runBag(const RunOptions& options) {
   input["imu_dropped"] = imu_gate;
   Json scans_gate = Json::object();
   scans_gate["out_of_order"] = scans_dropped.out_of_order;
-  scans_gate["ahead_of_imu"] = scans_dropped.ahead_of_imu;
+  scans_gate["stamp_jumps"] = scans_dropped.jumped;
   input["scans_dropped"] = scans_gate;
   input["truncated"] = source.truncated();
   Json lidars_in = Json::object();

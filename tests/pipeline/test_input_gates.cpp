@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -112,3 +113,38 @@ TEST(RunBag, AnUnwritableOutputFolderIsRefusedBeforeTheBagIsRead) {
 }
 
 }  // namespace mmlio::pipeline
+
+namespace mmlio {
+
+TEST(InputGates, AnImuGapIsNotInterpolatedTheLidarsCarryTheSweepsThrough) {
+  sim::SimOptions so;
+  so.scenario = "office";
+  so.duration_s = 16.0;
+  const sim::Simulator sim(so);
+  const io::RigConfig cfg = testing::simRigConfig(sim);
+  const auto run = [&](bool gap, std::size_t* degraded) {
+    Trajectory trajectory;
+    pipeline::OnlinePipeline online(cfg, "hvi", [&](const estimator::SweepResult& r) {
+      if (r.status == estimator::SweepResult::Status::kInitializing) return;
+      trajectory.push_back({r.state.stamp_ns, r.state.pose()});
+      *degraded += r.status == estimator::SweepResult::Status::kDegraded;
+    });
+    // No IMU from 6 to 8 s (walking): the samples are simply not there.
+    testing::replay(sim, online, {}, [gap](std::size_t i, ImuSample& s) {
+      if (gap && i >= 1200 && i < 1600) s.stamp_ns = 0;  // a stamp the gate drops as out of order
+    });
+    return trajectory;
+  };
+  std::size_t clean_degraded = 0, gap_degraded = 0;
+  const Trajectory clean = run(false, &clean_degraded), gapped = run(true, &gap_degraded);
+  const double clean_ate = eval::evaluate(sim.groundTruth(), clean).ate_rmse_m;
+  const double gap_ate = eval::evaluate(sim.groundTruth(), gapped).ate_rmse_m;
+  std::printf("office 16 s: clean ATE %.4f m; 2 s without IMU: ATE %.4f m, %zu degraded sweeps\n", clean_ate, gap_ate,
+              gap_degraded);
+  EXPECT_EQ(clean_degraded, 0u);
+  EXPECT_GE(gap_degraded, 15u);  // the sweeps of the gap are marked
+  EXPECT_GE(gapped.size() + 2, clean.size());
+  EXPECT_LT(gap_ate, 2.0 * clean_ate) << "clean " << clean_ate;
+}
+
+}  // namespace mmlio

@@ -30,11 +30,11 @@ class OnlinePipeline {
   const estimator::Odometry& odometry() const { return odometry_; }
   /// What the IMU check dropped before the estimator.
   const ImuGate& imuGate() const { return imu_gate_; }
-  /// LiDAR scans dropped before the sweep aligner: not after the same LiDAR's previous scan, or
-  /// starting far (> 2 s) ahead of the IMU stream (a corrupt stamp would otherwise hold every
-  /// later sweep back).
+  /// LiDAR scans dropped before the sweep aligner: not after the same LiDAR's previous scan, or a
+  /// lone stamp more than 2 s after it (a corrupt stamp would otherwise hold every later sweep
+  /// back; a LiDAR that resumes after a real gap is accepted again after three scans).
   struct ScanDrops {
-    std::size_t out_of_order = 0, ahead_of_imu = 0;
+    std::size_t out_of_order = 0, jumped = 0;
   };
   const ScanDrops& scanDrops() const { return scan_drops_; }
   std::size_t sweepsProcessed() const { return processed_; }
@@ -48,6 +48,11 @@ class OnlinePipeline {
   ImuGate imu_gate_;
   ScanDrops scan_drops_;
   std::map<std::string, Stamp> last_scan_ns_;
+  struct Jump {
+    Stamp last_ns = 0;
+    int run = 0;
+  };
+  std::map<std::string, Jump> scan_jumps_;
   std::deque<lidar::AlignedSweep> pending_;
   SweepCallback on_sweep_;
   std::size_t processed_ = 0;
