@@ -43,13 +43,14 @@ std::vector<std::uint8_t> FreeSpaceMemory::movedIn(const std::vector<Eigen::Vect
   }
   if (asked.size() > 2) asked = {asked.front(), asked.back()};
   if (asked.empty()) return flags;
+  // Seen through by one of them and seen on by none: a point on a silhouette edge, which one view
+  // may see past by a hair, is seen on by the other.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i)
-      for (const SweepView* v : asked)
-        if (v->seesThrough(points[i])) {
-          flags[i] = 1;
-          break;
-        }
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      int free = 0, hit = 0;
+      for (const SweepView* v : asked) v->count(points[i], &free, &hit);
+      flags[i] = free > 0 && hit == 0;
+    }
   });
   return flags;
 }

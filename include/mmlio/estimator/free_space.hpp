@@ -55,8 +55,8 @@ class FreeSpaceMemory {
   explicit FreeSpaceMemory(DynamicConfig config) : cfg_(config) {}
 
   void remember(std::shared_ptr<const SweepView> view);
-  /// One flag per point: 1 where the point lies in space an earlier sweep saw through (the oldest
-  /// and youngest sweeps of the look-back interval are asked).
+  /// One flag per point: 1 where the point lies in space an earlier sweep saw through and none saw
+  /// a surface at (the oldest and youngest sweeps of the look-back interval are asked).
   std::vector<std::uint8_t> movedIn(const std::vector<Eigen::Vector3d>& world_points, Stamp now) const;
   void clear() { views_.clear(); }
 
