@@ -76,6 +76,7 @@ struct BagSource::Impl {
     std::string topic;
     std::size_t messages = 0;
     std::size_t failed = 0;
+    std::size_t decoded = 0;  // clouds decoded: after the first, a bad one is a damaged message
   };
 
   std::string path;
@@ -286,8 +287,17 @@ template <class Msg> bool BagSource::Impl::decodeMessage(const Msg& m, SensorEve
           if (!msg) throw std::runtime_error("md5 " + m.md5() + " is not sensor_msgs/PointCloud2");
           try {
             scan = decodePointCloud2(*msg, decode[li], &st);
+            ++s.decoded;
           } catch (const Error& e) {
-            throw Error("topic " + s.topic + " message " + std::to_string(index) + " in " + path + ": " + e.what());
+            // The topic's first cloud failing is a format the decoder cannot read: stop with why. A
+            // later one (data shorter than width x point_step, ...) is one damaged message: skipped.
+            if (s.decoded == 0)
+              throw Error("topic " + s.topic + " message " + std::to_string(index) + " in " + path + ": " + e.what());
+            ++skipped;
+            if (s.failed++ == 0)
+              log::warn("skipping message ", index, " of ", s.topic, " in ", path, ": ", e.what(),
+                        "; further damaged messages on this topic are counted in the report");
+            return false;
           }
         } else {
           const auto msg = m.template instantiate<LivoxCustomMsg>();

@@ -175,8 +175,9 @@ RunResult runBag(const RunOptions& options) {
               scans_dropped.jumped, ")");
   rep["status"] = !result.complete ? "incomplete: " + result.error
                   : result.interrupted ? std::string("interrupted")
-                  : imu_dropped.total() + scan_drops > 0
-                      ? std::string("degraded: samples or scans dropped (see input.imu_dropped, input.scans_dropped)")
+                  : imu_dropped.total() + scan_drops + source.skippedMessages() > 0 || source.truncated()
+                      ? std::string("degraded: input dropped (see input.imu_dropped, input.scans_dropped, "
+                                    "input.skipped_messages, input.truncated)")
                       : std::string("complete");
   Json input = Json::object();
   input["bag"] = options.bag_path;

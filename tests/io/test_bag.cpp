@@ -141,7 +141,7 @@ TEST(BagSource, ExplicitAccUnitOverridesTheGuess) {
 
 /// A bag written with rosbag directly: an Ouster-like cloud (t in ns, organised 2 x 2, one NaN),
 /// IMU in m/s^2, topics without a leading '/', and one foreign message on the IMU topic.
-std::string writeRawBag() {
+std::string writeRawBag(int short_cloud = -1) {
   const std::string path = tempPath("raw.bag");
   rosbag::Bag bag(path, rosbag::bagmode::Write);
   for (int k = 0; k < 60; ++k) {
@@ -182,6 +182,7 @@ std::string writeRawBag() {
       std::memcpy(&c.data[16 * i + 8], &z, 4);
       std::memcpy(&c.data[16 * i + 12], &t, 4);
     }
+    if (k == short_cloud) c.data.resize(40);  // damaged: shorter than width x height x point_step
     bag.write("os_cloud_node/points", c.header.stamp, c);
   }
   bag.close();
@@ -210,6 +211,21 @@ TEST(BagSource, RawRosbagOusterBagDecodesWithMetricImuAndSkipsAForeignMessage) {
   EXPECT_EQ(src.imuCount(), 60u);
   EXPECT_EQ(src.skippedMessages(), 1u);
   EXPECT_EQ(src.stats().at("ouster").dropped_nan, 3u);
+}
+
+TEST(BagSource, ADamagedCloudAfterGoodOnesIsSkippedAndCountedAndReadingGoesOn) {
+  BagSourceOptions o;
+  o.imu_topic = "/imu";
+  o.lidars.push_back({"ouster", "/os_cloud_node/points", LidarKind::kSpinning, 0.5, 100.0, 16});
+  BagSource src(writeRawBag(1), o);
+  SensorEvent e;
+  std::vector<Stamp> starts;
+  while (src.next(&e))
+    if (e.kind == SensorEvent::Kind::kLidar) starts.push_back(e.scan.start_ns);
+  ASSERT_EQ(starts.size(), 2u);  // clouds 0 and 2
+  EXPECT_EQ(starts[1], kT0 + 200'000'000LL + 1000);
+  EXPECT_EQ(src.skippedMessages(), 2u);  // the foreign message and the damaged cloud
+  EXPECT_FALSE(src.truncated());
 }
 
 std::string errorOf(const std::function<void()>& f) {
