@@ -13,6 +13,7 @@
 
 #include "commands.hpp"
 #include "mmlio/core/error.hpp"
+#include "mmlio/core/voxel_key.hpp"
 #include "mmlio/eval/evaluation.hpp"
 #include "mmlio/eval/plot_evaluation.hpp"
 #include "mmlio/io/pcd_io.hpp"
@@ -66,8 +67,8 @@ MapSharpness mapSharpness(const std::string& map_path, const std::string& scenar
       off_points.back().xyz = w.cast<float>();
       continue;
     }
-    const auto axis = [](double v) { return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(v / kOnSurfaceM)) + (1 << 20)) & 0x1FFFFFu; };
-    voxels.insert((axis(w.x()) << 42) | (axis(w.y()) << 21) | axis(w.z()));
+    const auto idx = [](double v) { return static_cast<std::int64_t>(std::floor(v / kOnSurfaceM)); };
+    voxels.insert(packVoxelKey(idx(w.x()), idx(w.y()), idx(w.z())));
   }
   const auto at = [&d](double q) {
     const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(d.size() - 1));

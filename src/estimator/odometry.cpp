@@ -11,6 +11,7 @@
 
 #include "mmlio/core/log.hpp"
 #include "mmlio/core/so3.hpp"
+#include "mmlio/core/voxel_key.hpp"
 #include "mmlio/estimator/imu_factor.hpp"
 #include "mmlio/estimator/lidar_factors.hpp"
 #include "mmlio/estimator/sliding_window.hpp"
@@ -289,10 +290,8 @@ struct Odometry::Impl {
     // Raw points follow their feature's voxel (features are voxel centroids of the raw points).
     const double inv = 1.0 / cfg.plane_voxel_m;
     const auto key = [inv](const Eigen::Vector3d& p, int dx = 0, int dy = 0, int dz = 0) {
-      const auto axis = [inv](double v, int d) {
-        return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(v * inv)) + d + (1 << 20)) & 0x1FFFFFu;
-      };
-      return (axis(p.x(), dx) << 42) | (axis(p.y(), dy) << 21) | axis(p.z(), dz);
+      const auto idx = [inv](double v) { return static_cast<std::int64_t>(std::floor(v * inv)); };
+      return packVoxelKey(idx(p.x()) + dx, idx(p.y()) + dy, idx(p.z()) + dz);
     };
     // A mover is found where part of it entered free space (its leading side); its other returns
     // lie next to those: every feature in a voxel touching a flagged one goes with them.

@@ -4,15 +4,14 @@
 #include <cstdint>
 #include <unordered_map>
 
+#include "mmlio/core/voxel_key.hpp"
+
 namespace mmlio::lidar {
 namespace {
 
-// 21 bits per axis (±1M voxels) packed in one key: enough for any leaf >= 1 mm over ±1 km.
 std::uint64_t voxelKey(const Eigen::Vector3f& p, double inv_leaf) {
-  const auto idx = [&](float v) {
-    return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(v * inv_leaf)) + (1 << 20)) & 0x1FFFFF;
-  };
-  return (idx(p.x()) << 42) | (idx(p.y()) << 21) | idx(p.z());
+  const auto idx = [&](float v) { return static_cast<std::int64_t>(std::floor(v * inv_leaf)); };
+  return packVoxelKey(idx(p.x()), idx(p.y()), idx(p.z()));
 }
 
 struct Accumulator {

@@ -2,16 +2,14 @@
 
 #include <cmath>
 
+#include "mmlio/core/voxel_key.hpp"
+
 namespace mmlio::pipeline {
 namespace {
 
-// 21 bits per axis: +-1e6 voxels, i.e. +-20 km at 2 cm.
 std::uint64_t voxelKey(const Eigen::Vector3d& p, double leaf) {
-  auto axis = [leaf](double v) {
-    return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(v / leaf)) + (1 << 20)) &
-           0x1FFFFFu;
-  };
-  return (axis(p.x()) << 42) | (axis(p.y()) << 21) | axis(p.z());
+  const auto idx = [leaf](double v) { return static_cast<std::int64_t>(std::floor(v / leaf)); };
+  return packVoxelKey(idx(p.x()), idx(p.y()), idx(p.z()));
 }
 
 }  // namespace

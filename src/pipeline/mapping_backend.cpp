@@ -4,10 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 
 #include "mmlio/backend/point_to_plane_icp.hpp"
 #include "mmlio/core/log.hpp"
+#include "mmlio/core/voxel_key.hpp"
 
 namespace mmlio::pipeline {
 
@@ -16,10 +16,8 @@ namespace {
 constexpr double kMovedCellM = 0.5;
 
 std::uint64_t cellKey(const Eigen::Vector3d& p, int dx = 0, int dy = 0, int dz = 0) {
-  const auto axis = [](double v, int d) {
-    return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(v / kMovedCellM)) + d + (1 << 20)) & 0x1FFFFFu;
-  };
-  return (axis(p.x(), dx) << 42) | (axis(p.y(), dy) << 21) | axis(p.z(), dz);
+  const auto idx = [](double v) { return static_cast<std::int64_t>(std::floor(v / kMovedCellM)); };
+  return packVoxelKey(idx(p.x()) + dx, idx(p.y()) + dy, idx(p.z()) + dz);
 }
 
 }  // namespace
@@ -151,10 +149,8 @@ void MappingBackend::closeSubmap() {
       // later move each point with the keyframe that kept it, so the map stays consistent.
       auto& covered = covered_[lidar];
       const auto key = [leaf](const Eigen::Vector3d& w) {
-        const auto axis = [leaf](double v) {
-          return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(v / leaf)) + (1 << 20)) & 0x1FFFFFu;
-        };
-        return (axis(w.x()) << 42) | (axis(w.y()) << 21) | axis(w.z());
+        const auto idx = [leaf](double v) { return static_cast<std::int64_t>(std::floor(v / leaf)); };
+        return packVoxelKey(idx(w.x()), idx(w.y()), idx(w.z()));
       };
       std::size_t kept = 0;
       for (const Point& p : pts)

@@ -36,10 +36,6 @@ Json vec3(const Eigen::Vector3d& v) {
   return a;
 }
 
-}  // namespace
-
-namespace {
-
 // Found before hours of work, not after: the output folder exists (or is created) and takes a file.
 void checkWritable(const std::string& dir) {
   namespace fs = std::filesystem;

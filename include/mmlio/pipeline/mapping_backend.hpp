@@ -101,7 +101,7 @@ class MappingBackend {
   std::unordered_set<std::uint64_t> moved_cells_, moved_cores_;
   bool nearMoved(const Eigen::Vector3d& world) const;
   GhostRemoval ghosts_;
-  MapAccumulator dynamic_{0.05};
+  MapAccumulator dynamic_;  // world frame, at the poses of the moment (map_leaf_m)
   Trajectory odometry_;
   Eigen::Isometry3d T_world_keyframe_ = Eigen::Isometry3d::Identity();
   std::size_t loop_attempts_ = 0;

@@ -1,0 +1,14 @@
+#pragma once
+// One 64-bit key for a voxel's integer indices: 21 bits per axis, offset by 2^20, so indices in
+// +-1,048,576 (+-1 km at 1 mm, +-52 km at 5 cm) pack without collision. Callers compute the
+// indices (floor of coordinate / voxel size) the way their grid is defined.
+#include <cstdint>
+
+namespace mmlio {
+
+inline std::uint64_t packVoxelKey(std::int64_t ix, std::int64_t iy, std::int64_t iz) {
+  const auto axis = [](std::int64_t i) { return static_cast<std::uint64_t>(i + (1 << 20)) & 0x1FFFFFu; };
+  return (axis(ix) << 42) | (axis(iy) << 21) | axis(iz);
+}
+
+}  // namespace mmlio
