@@ -41,12 +41,14 @@ RangeImage::RangeImage(const std::vector<Point>& points, const RangeImageConfig&
   cells.reserve(points.size());
   int lo = std::numeric_limits<int>::max(), hi = std::numeric_limits<int>::min();
   for (const Point& p : points) {
-    int col, row;
     const Eigen::Vector3d v = p.xyz.cast<double>();
-    if (!pixelOf(v, &col, &row)) continue;
+    const double r = v.norm();
+    if (!(r > 1e-3) || !std::isfinite(r)) continue;  // no-return (0,0,0) points, NaN
+    int col, row;
+    pixelOf(v, &col, &row);
     lo = std::min(lo, row);
     hi = std::max(hi, row);
-    cells.push_back({col, row, static_cast<std::uint16_t>(std::clamp(std::lround(v.norm() * 100.0), 1L, 65535L))});
+    cells.push_back({col, row, static_cast<std::uint16_t>(std::clamp(std::lround(r * 100.0), 1L, 65535L))});
   }
   if (cells.empty()) return;
   row0_ = lo;
@@ -58,12 +60,9 @@ RangeImage::RangeImage(const std::vector<Point>& points, const RangeImageConfig&
   }
 }
 
-bool RangeImage::pixelOf(const Eigen::Vector3d& p, int* col, int* row) const {
-  const double r = p.norm();
-  if (!(r > 1e-3) || !std::isfinite(r)) return false;
+void RangeImage::pixelOf(const Eigen::Vector3d& p, int* col, int* row) const {
   *col = std::clamp(static_cast<int>(std::floor((fastAtan2(p.y(), p.x()) * kRadToDeg + 180.0) * inv_res_)), 0, cols_ - 1);
   *row = rowOf(elevationOf(p), inv_res_) - row0_;
-  return true;
 }
 
 Visibility RangeImage::classify(const Eigen::Vector3d& p) const {

@@ -44,7 +44,8 @@ class RangeImage {
   std::size_t memoryBytes() const { return ranges_.size() * sizeof(ranges_[0]); }
 
  private:
-  bool pixelOf(const Eigen::Vector3d& p, int* col, int* row) const;  // row relative to row0_, may lie outside
+  // For a finite, non-zero p; row relative to row0_, may lie outside the image.
+  void pixelOf(const Eigen::Vector3d& p, int* col, int* row) const;
 
   RangeImageConfig cfg_;
   double inv_res_ = 1.0;
