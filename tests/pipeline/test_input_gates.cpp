@@ -25,6 +25,27 @@ ImuSample at(double t_s) {
   return s;
 }
 
+/// The simulated office of `duration_s` through the streaming pipeline (HVI, true calibration), its
+/// scans and IMU samples edited as testing::replay does; counts the degraded sweeps if asked.
+Trajectory runOffice(const sim::Simulator& sim, const std::function<void(int, LidarScan&)>& edit,
+                     const std::function<void(std::size_t, ImuSample&)>& edit_imu, std::size_t* degraded = nullptr) {
+  Trajectory trajectory;
+  pipeline::OnlinePipeline online(testing::simRigConfig(sim), "hvi", [&](const estimator::SweepResult& r) {
+    if (r.status == estimator::SweepResult::Status::kInitializing) return;
+    trajectory.push_back({r.state.stamp_ns, r.state.pose()});
+    if (degraded) *degraded += r.status == estimator::SweepResult::Status::kDegraded;
+  });
+  testing::replay(sim, online, edit, edit_imu);
+  return trajectory;
+}
+
+sim::Simulator office(double duration_s) {
+  sim::SimOptions so;
+  so.scenario = "office";
+  so.duration_s = duration_s;
+  return sim::Simulator(so);
+}
+
 }  // namespace
 
 TEST(ImuGate, DropsAndCountsNonFiniteImpossibleAndDisorderedSamples) {
@@ -57,22 +78,9 @@ TEST(ImuGate, AStreamThatStaysAfterAGapIsAcceptedAgainAfterAFewSamples) {
 }
 
 TEST(InputGates, OneCorruptImuSampleOrScanStampLeavesTheTrajectoryAsGoodAsTheCleanRun) {
-  sim::SimOptions so;
-  so.scenario = "office";
-  so.duration_s = 12.0;
-  const sim::Simulator sim(so);
-  const io::RigConfig cfg = testing::simRigConfig(sim);
-  const auto run = [&](const std::function<void(int, LidarScan&)>& edit,
-                        const std::function<void(std::size_t, ImuSample&)>& edit_imu) {
-    Trajectory trajectory;
-    pipeline::OnlinePipeline online(cfg, "hvi", [&](const estimator::SweepResult& r) {
-      if (r.status != estimator::SweepResult::Status::kInitializing) trajectory.push_back({r.state.stamp_ns, r.state.pose()});
-    });
-    testing::replay(sim, online, edit, edit_imu);
-    return trajectory;
-  };
-  const Trajectory clean = run({}, {});
-  const Trajectory faulty = run({}, [](std::size_t i, ImuSample& s) {
+  const sim::Simulator sim = office(12.0);
+  const Trajectory clean = runOffice(sim, {}, {});
+  const Trajectory faulty = runOffice(sim, {}, [](std::size_t i, ImuSample& s) {
     if (i == 1200) s.gyro_rad_s.x() = std::numeric_limits<double>::quiet_NaN();  // moving, 6 s in
     if (i == 1400) s.acc_m_s2.z() = 1.8e109;
     if (i == 1600) s.stamp_ns += fromSec(4e9);  // the year 2106
@@ -84,7 +92,8 @@ TEST(InputGates, OneCorruptImuSampleOrScanStampLeavesTheTrajectoryAsGoodAsTheCle
   EXPECT_LT(faulty_ate, 1.2 * clean_ate + 0.002) << "clean " << clean_ate;
 
   // One Velodyne sweep stamped in the year 2106: that sweep is lost, tracking goes on.
-  const Trajectory late = run(
+  const Trajectory late = runOffice(
+      sim,
       [](int index, LidarScan& scan) {
         if ((index == 120 || index == 121) && scan.sensor == "velodyne") scan.start_ns += fromSec(4e9);
       },
@@ -117,26 +126,16 @@ TEST(RunBag, AnUnwritableOutputFolderIsRefusedBeforeTheBagIsRead) {
 namespace mmlio {
 
 TEST(InputGates, AnImuGapIsNotInterpolatedTheLidarsCarryTheSweepsThrough) {
-  sim::SimOptions so;
-  so.scenario = "office";
-  so.duration_s = 16.0;
-  const sim::Simulator sim(so);
-  const io::RigConfig cfg = testing::simRigConfig(sim);
-  const auto run = [&](bool gap, std::size_t* degraded) {
-    Trajectory trajectory;
-    pipeline::OnlinePipeline online(cfg, "hvi", [&](const estimator::SweepResult& r) {
-      if (r.status == estimator::SweepResult::Status::kInitializing) return;
-      trajectory.push_back({r.state.stamp_ns, r.state.pose()});
-      *degraded += r.status == estimator::SweepResult::Status::kDegraded;
-    });
-    // No IMU from 6 to 8 s (walking): the samples are simply not there.
-    testing::replay(sim, online, {}, [gap](std::size_t i, ImuSample& s) {
-      if (gap && i >= 1200 && i < 1600) s.stamp_ns = 0;  // a stamp the gate drops as out of order
-    });
-    return trajectory;
-  };
+  const sim::Simulator sim = office(16.0);
   std::size_t clean_degraded = 0, gap_degraded = 0;
-  const Trajectory clean = run(false, &clean_degraded), gapped = run(true, &gap_degraded);
+  const Trajectory clean = runOffice(sim, {}, {}, &clean_degraded);
+  // No IMU from 6 to 8 s (walking): the samples are simply not there.
+  const Trajectory gapped = runOffice(
+      sim, {},
+      [](std::size_t i, ImuSample& s) {
+        if (i >= 1200 && i < 1600) s.stamp_ns = 0;  // a stamp the gate drops as out of order
+      },
+      &gap_degraded);
   const double clean_ate = eval::evaluate(sim.groundTruth(), clean).ate_rmse_m;
   const double gap_ate = eval::evaluate(sim.groundTruth(), gapped).ate_rmse_m;
   std::printf("office 16 s: clean ATE %.4f m; 2 s without IMU: ATE %.4f m, %zu degraded sweeps\n", clean_ate, gap_ate,
