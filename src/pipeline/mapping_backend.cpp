@@ -253,8 +253,11 @@ void MappingBackend::removeGhosts(std::size_t submap) {
           vote(1, &free, &hit);
         }
         judged[i] = free + hit > 0;
-        // The keyframe that stored a point saw it: a ghost has one hit of its own.
-        ghost[i] = free >= 2 && free > hit;
+        // A ghost is seen through by a fair share of the views that decide on it, not by most:
+        // where people pace, later views also see them (or another) back on the same spot; a
+        // static surface is seen through only by the rare view whose pose or mixed pixel is off.
+        // At least two views, so one such view alone never removes anything.
+        ghost[i] = free >= 2 && 2 * free >= hit;
       }
     });
     std::vector<Point> removed;
