@@ -6,7 +6,7 @@ set -euo pipefail
 PACKAGES=(
   build-essential cmake pkg-config
   libeigen3-dev libceres-dev libtbb-dev libnanoflann-dev
-  libyaml-cpp-dev libcli11-dev libgtest-dev libbenchmark-dev libpng-dev
+  libyaml-cpp-dev libcli11-dev libgtest-dev libbenchmark-dev libpng-dev nlohmann-json3-dev
   librosbag-storage-dev pluginlib-dev libroscpp-dev libsensor-msgs-dev libstd-msgs-dev
   python3
   parallel bc

@@ -136,6 +136,12 @@ Trajectory MappingBackend::correctedTrajectory() const {
   return out;
 }
 
+Eigen::Isometry3d MappingBackend::correction() const {
+  if (graph_.loops() == 0 || odometry_.empty()) return Eigen::Isometry3d::Identity();
+  const StampedPose& last = odometry_.back();
+  return graph_.correct(last.stamp_ns, last.T_world_body) * last.T_world_body.inverse();
+}
+
 void MappingBackend::closeSubmap() {
   if (submaps_.empty()) return;
   const Eigen::Isometry3d T_world_keyframe = graph_.pose(static_cast<int>(submaps_.size()) - 1);

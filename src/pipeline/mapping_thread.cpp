@@ -40,6 +40,7 @@ void MappingThread::run() {
     }
     not_full_.notify_one();
     if (error_) continue;  // the back end failed: drain without work, finish() reports it
+    std::lock_guard<std::mutex> lock(backend_mutex_);
     Stopwatch watch;
     try {
       backend_.addSweep(sweep);
@@ -48,6 +49,11 @@ void MappingThread::run() {
     }
     timing_.add({{"mapping_backend", watch.elapsedMs()}});
   }
+}
+
+StageStats MappingThread::timing() const {
+  std::lock_guard<std::mutex> lock(backend_mutex_);
+  return timing_;
 }
 
 MappingBackend& MappingThread::finish() {
@@ -60,6 +66,7 @@ MappingBackend& MappingThread::finish() {
     if (worker_.joinable()) worker_.join();
     finished_ = true;
     if (error_) std::rethrow_exception(error_);
+    std::lock_guard<std::mutex> lock(backend_mutex_);
     backend_.finish();
   }
   return backend_;

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
-#include <set>
 
 #include "mmlio/core/log.hpp"
 #include "mmlio/eval/canvas.hpp"
@@ -12,66 +11,6 @@
 #include "mmlio/io/trajectory_writer.hpp"
 
 namespace mmlio::pipeline {
-namespace {
-
-// Renders a report object generically so report.md never disagrees with report.json:
-// scalars as a bullet list, objects of scalars as two-column tables, objects of objects
-// (timing, per-LiDAR figures) as one table with a column per inner key, and a section mixing
-// both (degeneracy) as its fields' table followed by one subsection per object.
-void renderSection(std::string& md, const std::string& title, const Json& section, int level = 2) {
-  md += "\n" + std::string(static_cast<std::size_t>(level), '#') + " " + title + "\n\n";
-  bool nested = false, all_nested = !section.members().empty();
-  for (const auto& [k, v] : section.members()) {
-    nested |= v.isObject();
-    all_nested &= v.isObject();
-  }
-  if (!all_nested) {
-    md += "| field | value |\n|---|---|\n";
-    for (const auto& [k, v] : section.members())
-      if (!v.isObject()) md += "| " + k + " | " + (v.isScalar() ? v.text() : v.dump(-1)) + " |\n";
-    if (nested)
-      for (const auto& [k, v] : section.members())
-        if (v.isObject()) renderSection(md, title + " / " + k, v, level + 1);
-    return;
-  }
-  std::vector<std::string> columns;
-  std::set<std::string> seen;
-  for (const auto& [k, v] : section.members())
-    for (const auto& [ik, iv] : v.members())
-      if (seen.insert(ik).second) columns.push_back(ik);
-  md += "| " + title + " |";
-  for (const auto& c : columns) md += " " + c + " |";
-  md += "\n|---|";
-  for (std::size_t i = 0; i < columns.size(); ++i) md += "---|";
-  md += "\n";
-  for (const auto& [k, v] : section.members()) {
-    md += "| " + k + " |";
-    for (const auto& c : columns) {
-      std::string cell;
-      for (const auto& [ik, iv] : v.members())
-        if (ik == c) cell = iv.isScalar() ? iv.text() : iv.dump(-1);
-      md += " " + cell + " |";
-    }
-    md += "\n";
-  }
-}
-
-}  // namespace
-
-Json evaluationJson(const eval::EvalResult& ev) {
-  Json j = Json::object();
-  j["ate_rmse_m"] = ev.ate_rmse_m;
-  j["ate_max_m"] = ev.ate_max_m;
-  j["ate_rot_rmse_deg"] = ev.ate_rot_rmse_deg;
-  j["rpe_10m_pct"] = ev.rpe_10m_pct;
-  j["rpe_10m_deg_per_m"] = ev.rpe_10m_deg_per_m;
-  j["end_to_end_m"] = ev.end_to_end_m;
-  j["path_length_m"] = ev.path_length_m;
-  j["end_to_end_pct"] = ev.path_length_m > 0 ? 100.0 * ev.end_to_end_m / ev.path_length_m : 0.0;
-  j["coverage"] = ev.coverage;
-  j["associated_poses"] = ev.num_associated;
-  return j;
-}
 
 void plotMapTopView(const std::string& png_path, const std::vector<Point>& map_world,
                     const Trajectory& trajectory, double slice_half_height_m) {
@@ -110,33 +49,22 @@ void plotMapTopView(const std::string& png_path, const std::vector<Point>& map_w
   canvas.savePng(png_path);
 }
 
-void writeReports(const std::string& dir, Json& report, const Trajectory& trajectory,
+void writeReports(const std::string& dir, RunReport& report, const Trajectory& trajectory,
                   const std::vector<Point>& map_world, const std::string& gt_path) {
-  Json figures = Json::object();
+  report.figures.clear();
   try {
     plotMapTopView(dir + "map_top.png", map_world, trajectory);
-    figures["map_top"] = dir + "map_top.png";
+    report.figures["map_top"] = dir + "map_top.png";
     if (!gt_path.empty()) {
-      const eval::EvalResult ev = eval::evaluate(io::readTum(gt_path), trajectory);
-      report["evaluation"] = evaluationJson(ev);
-      eval::plotEvaluation(ev, dir + "evaluation.png");
-      figures["evaluation"] = dir + "evaluation.png";
+      report.evaluation = eval::evaluate(io::readTum(gt_path), trajectory);
+      eval::plotEvaluation(*report.evaluation, dir + "evaluation.png");
+      report.figures["evaluation"] = dir + "evaluation.png";
     }
   } catch (const std::exception& e) {
     log::emit(log::Level::kWarn, "report figures skipped: ", e.what());
   }
-  report["figures"] = figures;
-
-  io::writeFileAtomically(dir + "report.json", [&](std::ostream& os) { os << report.dump(2) << '\n'; });
-
-  std::string md = "# mmlio run report\n\n";
-  for (const auto& [k, v] : report.members())
-    if (v.isScalar()) md += "- **" + k + "**: " + v.text() + "\n";
-  for (const auto& [k, v] : report.members())
-    if (v.isObject() && k != "figures") renderSection(md, k, v);
-  md += "\n## figures\n\n![map top view](map_top.png)\n";
-  if (!gt_path.empty()) md += "\n![evaluation](evaluation.png)\n";
-  io::writeFileAtomically(dir + "report.md", [&](std::ostream& os) { os << md; });
+  io::writeFileAtomically(dir + "report.json", [&](std::ostream& os) { os << toJson(report).dump(2) << '\n'; });
+  io::writeFileAtomically(dir + "report.md", [&](std::ostream& os) { os << toMarkdown(report); });
 }
 
 }  // namespace mmlio::pipeline

@@ -58,6 +58,9 @@ class MappingBackend {
   void finish();
 
   Trajectory correctedTrajectory() const;
+  /// The loops' correction at the newest odometry pose: T_world_corrected * T_world_odometry^-1
+  /// (identity before the first loop). Live nodes publish it as map -> odom.
+  Eigen::Isometry3d correction() const;
   /// The map at the corrected poses. With clean_map it no longer holds the points that nearby
   /// keyframes (ghost_keyframes before and after the one that stored them) saw through at least
   /// twice and more often than they saw them: something stood there and left. A surface seen once

@@ -31,8 +31,15 @@ class MappingThread {
   MappingBackend& finish();
   /// The back end itself; read it only after finish() (also when finish() threw).
   MappingBackend& backend() { return backend_; }
-  /// Milliseconds the back end spent per sweep (on its own thread).
-  const StageStats& timing() const { return timing_; }
+  /// Milliseconds the back end spent per sweep (on its own thread); a copy, safe while running.
+  StageStats timing() const;
+  /// Runs f(backend) between two of the back end's sweeps, for live queries from another thread
+  /// (corrected path, map); the back end waits meanwhile.
+  template <class F>
+  auto read(F&& f) const {
+    std::lock_guard<std::mutex> lock(backend_mutex_);
+    return f(static_cast<const MappingBackend&>(backend_));
+  }
 
  private:
   void run();
@@ -40,7 +47,8 @@ class MappingThread {
   MappingBackend backend_;
   std::size_t capacity_;
   std::deque<estimator::SweepResult> queue_;
-  std::mutex mutex_;
+  std::mutex mutex_;                   // the queue
+  mutable std::mutex backend_mutex_;   // the back end and its timing
   std::condition_variable not_empty_, not_full_;
   bool closing_ = false, finished_ = false;
   std::exception_ptr error_;

@@ -1,17 +1,15 @@
 #pragma once
 // The main job: a ROS1 bag in; trajectory.tum, map.pcd and report.json (and report.md) out.
 //
-// Stream: io::BagSource (time order) -> IMU to the odometry, LiDAR scans shifted by their clock
-// offsets into lidar::SweepAligner -> fused sweeps wait until the IMU covers their end ->
-// estimator::Odometry -> trajectory + map accumulator. A failure mid-bag still writes what was
-// computed (marked incomplete in the report) before the error is reported.
+// A feeder of pipeline::System: io::BagSource (time order) -> System -> outputs. A failure mid-bag
+// still writes what was computed (marked incomplete in the report) before the error is reported.
 #include <functional>
 #include <atomic>
 #include <string>
 
 #include "mmlio/core/types.hpp"
 #include "mmlio/io/rig_config.hpp"
-#include "mmlio/pipeline/json.hpp"
+#include "mmlio/pipeline/run_report.hpp"
 #include "mmlio/pipeline/stage_stats.hpp"
 
 namespace mmlio::pipeline {
@@ -34,7 +32,7 @@ struct RunResult {
   Trajectory trajectory;          // IMU pose at the end of every tracked sweep
   StageStats timing;              // the sweep loop (odometry and hand-off), per sweep
   StageStats backend_timing;      // the mapping back end, per sweep, on its own thread
-  Json report;
+  RunReport report;
   std::size_t map_points = 0;
   bool complete = true;           // false: the bag ended in an error after `trajectory`
   bool interrupted = false;       // options.stop was set: the outputs hold the run so far

@@ -1,0 +1,76 @@
+#pragma once
+// What a run did, as data: the System fills it, the feeder (`mmlio run`, the ROS node) adds what
+// only it knows about its input, and it becomes report.json and report.md at the edge
+// (writeReports). Sections whose owners already summarise themselves (degeneracy spells, the
+// back end's loops) stay JSON.
+#include <cstddef>
+#include <map>
+#include <optional>
+#include <string>
+
+#include "mmlio/eval/evaluation.hpp"
+#include "mmlio/imu/initializer.hpp"
+#include "mmlio/io/decode_stats.hpp"
+#include "mmlio/pipeline/imu_gate.hpp"
+#include "mmlio/pipeline/json.hpp"
+#include "mmlio/pipeline/stage_stats.hpp"
+
+namespace mmlio::pipeline {
+
+struct RunReport {
+  struct Input {
+    std::string source;                 // bag path, or "live" (the node)
+    std::string config;                 // rig YAML path ("" = built-in defaults)
+    std::string mode;
+    double duration_s = 0.0;            // bag duration, or the time the node has run (sensor clock)
+    std::size_t imu_messages = 0;
+    double imu_acc_scale = 1.0;
+    std::size_t skipped_messages = 0;   // failed to deserialise
+    ImuGate::Counts imu_dropped;
+    std::size_t scans_out_of_order = 0, scans_stamp_jumps = 0;
+    std::size_t queue_dropped_imu = 0, queue_dropped_scans = 0;  // live: processing queue full
+    bool truncated = false;
+    std::map<std::string, io::DecodeStats> decoded;  // per LiDAR
+  };
+  struct Sweeps {
+    std::size_t processed = 0, tracked = 0, degraded = 0, initialising = 0, keyframes = 0, degenerate = 0;
+  };
+  struct LidarFigures {
+    std::size_t sweeps = 0, points = 0, edges = 0, planes = 0, bad_frames = 0;
+  };
+  struct Dynamic {
+    bool enabled = true, clean_map = true;
+    std::size_t feature_points_rejected = 0, sweeps_with_rejections = 0, local_map_points_carved = 0;
+    std::size_t map_points_judged = 0, map_points_removed = 0, dynamic_map_points = 0;
+    double map_assembly_s = 0.0;
+  };
+  struct Outputs {
+    std::string trajectory, map, dynamic_map;
+    std::size_t poses = 0, map_points = 0;
+    double map_voxel_m = 0.0;
+    std::map<std::string, std::string> per_lidar_maps;
+  };
+
+  std::string status = "complete";  // complete | degraded: ... | interrupted | incomplete: <error>
+  Input input;
+  imu::ImuInitResult imu_init;
+  Sweeps sweeps;
+  Json degeneracy = Json::object();
+  std::map<std::string, LidarFigures> features;
+  StageStats timing, timing_backend;
+  double wall_time_s = 0.0, realtime_factor = 0.0;
+  Json mapping = Json::object();
+  Dynamic dynamic;
+  Outputs outputs;
+  std::optional<eval::EvalResult> evaluation;  // with ground truth
+  std::map<std::string, std::string> figures;
+
+  /// True when input was dropped, skipped or cut short (the status then says "degraded").
+  bool inputDegraded() const;
+};
+
+Json toJson(const RunReport& report);
+/// report.md: every field of toJson(report), sections as tables.
+std::string toMarkdown(const RunReport& report);
+
+}  // namespace mmlio::pipeline

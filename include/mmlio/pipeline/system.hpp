@@ -1,0 +1,85 @@
+#pragma once
+// mmlio as one system: IMU samples and LiDAR scans in (any interleaving), a pose out for every
+// tracked sweep, the mapping back end (loop closure, corrected trajectory, submaps, ghost removal)
+// on its own thread, and the run's report. `mmlio run` (a bag) and `mmlio_node` (live topics) are
+// feeders of it: they differ only in where the data comes from and where the results go.
+//
+// Threads: addImu/addScan/flush/finish and the observer run on the feeding thread. The live
+// queries (trajectory, map, mapFromOdom, report) may be called from it at any time: they read the
+// back end between two of its sweeps.
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "mmlio/core/timer.hpp"
+#include "mmlio/io/rig_config.hpp"
+#include "mmlio/pipeline/degeneracy_tally.hpp"
+#include "mmlio/pipeline/mapping_thread.hpp"
+#include "mmlio/pipeline/online_pipeline.hpp"
+#include "mmlio/pipeline/run_report.hpp"
+
+namespace mmlio::pipeline {
+
+class System {
+ public:
+  /// Every sweep after IMU initialisation, as soon as it is tracked (the node publishes from it).
+  using SweepObserver = std::function<void(const estimator::SweepResult&)>;
+
+  /// Throws mmlio::Error on a bad mode or a config with no active LiDAR.
+  System(const io::RigConfig& cfg, const std::string& mode, SweepObserver observer = {});
+
+  void addImu(const ImuSample& sample) {
+    if (first_imu_ns_ == 0) first_imu_ns_ = sample.stamp_ns;
+    online_.addImu(sample);
+  }
+  /// scan.sensor names a configured LiDAR (others are ignored); its clock offset is applied here.
+  void addScan(LidarScan scan) { online_.addScan(std::move(scan)); }
+  /// End of the stream: the sweeps still waiting for IMU are processed.
+  void flush() { online_.flush(); }
+  /// Waits for the back end and runs its final loop check. A failing back end is logged and
+  /// stated in the report; the trajectory and the map so far stay available. Idempotent.
+  void finish();
+
+  /// Odometry poses (IMU frame, one per tracked sweep), not corrected by loops.
+  const Trajectory& odometryTrajectory() const { return odometry_poses_; }
+  /// The same poses corrected by the loops closed so far.
+  Trajectory trajectory() const;
+  /// Loop correction at the newest pose, map <- odom (identity before the first loop).
+  Eigen::Isometry3d mapFromOdom() const;
+  std::size_t loops() const;
+  /// The map at the corrected poses (the back end pauses while it is assembled).
+  std::vector<Point> map() const;
+  /// The run so far; the feeder adds what it knows of its input (source, decoding, drops).
+  RunReport report() const;
+  /// trajectory.tum (+ KITTI if configured), map.pcd, per-LiDAR and dynamic maps, report.json,
+  /// report.md and figures into dir (created); returns the report as written. The files are
+  /// replaced atomically, so a live save never leaves a half-written one.
+  RunReport writeOutputs(const std::string& dir, RunReport report, const std::string& gt_path = "") const;
+
+  const estimator::Odometry& odometry() const { return online_.odometry(); }
+  std::size_t sweepsProcessed() const { return online_.sweepsProcessed(); }
+  const io::RigConfig& config() const { return cfg_; }
+  const std::string& mode() const { return mode_; }
+
+ private:
+  void onSweep(const estimator::SweepResult& r);
+
+  io::RigConfig cfg_;
+  std::string mode_;
+  SweepObserver observer_;
+  MappingThread mapping_;
+  DegeneracyTally degeneracy_;
+  RunReport::Sweeps sweeps_;
+  RunReport::Dynamic dynamic_;
+  std::map<std::string, RunReport::LidarFigures> lidars_;
+  StageStats timing_;
+  Trajectory odometry_poses_;
+  Stamp first_imu_ns_ = 0;
+  std::string backend_error_;
+  bool finished_ = false;
+  Stopwatch wall_;
+  OnlinePipeline online_;  // last: its callback uses the members above
+};
+
+}  // namespace mmlio::pipeline

@@ -1,0 +1,178 @@
+#include "mmlio/pipeline/run_report.hpp"
+
+#include <set>
+#include <vector>
+
+namespace mmlio::pipeline {
+namespace {
+
+Json vec3(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); }
+
+Json evaluationJson(const eval::EvalResult& ev) {
+  Json j = Json::object();
+  j["ate_rmse_m"] = ev.ate_rmse_m;
+  j["ate_max_m"] = ev.ate_max_m;
+  j["ate_rot_rmse_deg"] = ev.ate_rot_rmse_deg;
+  j["rpe_10m_pct"] = ev.rpe_10m_pct;
+  j["rpe_10m_deg_per_m"] = ev.rpe_10m_deg_per_m;
+  j["end_to_end_m"] = ev.end_to_end_m;
+  j["path_length_m"] = ev.path_length_m;
+  j["end_to_end_pct"] = ev.path_length_m > 0 ? 100.0 * ev.end_to_end_m / ev.path_length_m : 0.0;
+  j["coverage"] = ev.coverage;
+  j["associated_poses"] = ev.num_associated;
+  return j;
+}
+
+// A table cell: '|' would end it.
+std::string cell(const Json& v) {
+  std::string text = plainText(v), out;
+  for (char c : text) out += c == '|' ? std::string("\\|") : std::string(1, c);
+  return out;
+}
+
+// Renders a report object generically so report.md never disagrees with report.json: scalars and
+// arrays as a two-column table, objects of objects (timing, per-LiDAR figures) as one table with
+// a column per inner key, and a section mixing both (input, degeneracy) as its fields' table
+// followed by one subsection per object.
+void renderSection(std::string& md, const std::string& title, const Json& section, int level = 2) {
+  md += "\n" + std::string(static_cast<std::size_t>(level), '#') + " " + title + "\n\n";
+  if (section.empty()) {
+    md += "(none)\n";
+    return;
+  }
+  bool nested = false, all_nested = true;
+  for (const auto& [k, v] : section.items()) {
+    nested |= v.is_object();
+    all_nested &= v.is_object();
+  }
+  if (!all_nested) {
+    md += "| field | value |\n|---|---|\n";
+    for (const auto& [k, v] : section.items())
+      if (!v.is_object()) md += "| " + k + " | " + cell(v) + " |\n";
+    if (nested)
+      for (const auto& [k, v] : section.items())
+        if (v.is_object()) renderSection(md, title + " / " + k, v, level + 1);
+    return;
+  }
+  std::vector<std::string> columns;
+  std::set<std::string> seen;
+  for (const auto& [k, v] : section.items())
+    for (const auto& [ik, iv] : v.items())
+      if (seen.insert(ik).second) columns.push_back(ik);
+  md += "| " + title + " |";
+  for (const auto& c : columns) md += " " + c + " |";
+  md += "\n|---|";
+  for (std::size_t i = 0; i < columns.size(); ++i) md += "---|";
+  md += "\n";
+  for (const auto& [k, v] : section.items()) {
+    md += "| " + k + " |";
+    for (const auto& c : columns) md += " " + (v.contains(c) ? cell(v[c]) : std::string()) + " |";
+    md += "\n";
+  }
+}
+
+}  // namespace
+
+bool RunReport::inputDegraded() const {
+  return input.imu_dropped.total() + input.scans_out_of_order + input.scans_stamp_jumps + input.skipped_messages +
+                 input.queue_dropped_imu + input.queue_dropped_scans >
+             0 ||
+         input.truncated;
+}
+
+Json toJson(const RunReport& r) {
+  Json rep = Json::object();
+  rep["status"] = r.status;
+
+  Json& in = rep["input"];
+  in["source"] = r.input.source;
+  in["config"] = r.input.config.empty() ? std::string("(built-in defaults)") : r.input.config;
+  in["mode"] = r.input.mode;
+  in["duration_s"] = r.input.duration_s;
+  in["imu_messages"] = r.input.imu_messages;
+  in["imu_acc_scale"] = r.input.imu_acc_scale;
+  in["skipped_messages"] = r.input.skipped_messages;
+  in["truncated"] = r.input.truncated;
+  in["imu_dropped"] = {{"non_finite", r.input.imu_dropped.non_finite},
+                       {"beyond_range", r.input.imu_dropped.out_of_range},
+                       {"out_of_order", r.input.imu_dropped.out_of_order},
+                       {"stamp_jumps", r.input.imu_dropped.jumped}};
+  in["scans_dropped"] = {{"out_of_order", r.input.scans_out_of_order}, {"stamp_jumps", r.input.scans_stamp_jumps}};
+  if (r.input.queue_dropped_imu + r.input.queue_dropped_scans > 0 || r.input.source == "live")
+    in["queue_dropped"] = {{"imu", r.input.queue_dropped_imu}, {"scans", r.input.queue_dropped_scans}};
+  Json decoded = Json::object();
+  for (const auto& [name, st] : r.input.decoded)
+    decoded[name] = {{"points_kept", st.kept},
+                     {"dropped_nan", st.dropped_nan},
+                     {"dropped_zero", st.dropped_zero},
+                     {"dropped_range", st.dropped_range}};
+  in["decoded"] = decoded;
+
+  rep["imu_init"] = {{"ok", r.imu_init.ok},
+                     {"gravity_norm_m_s2", r.imu_init.gravity_norm_m_s2},
+                     {"gyro_bias_rad_s", vec3(r.imu_init.gyro_bias)},
+                     {"acc_scale", r.input.imu_acc_scale},
+                     {"message", r.imu_init.message}};
+  rep["sweeps"] = {{"processed", r.sweeps.processed}, {"tracked", r.sweeps.tracked},
+                   {"degraded", r.sweeps.degraded},   {"initialising", r.sweeps.initialising},
+                   {"keyframes", r.sweeps.keyframes}, {"degenerate", r.sweeps.degenerate}};
+  rep["degeneracy"] = r.degeneracy;
+
+  Json features = Json::object();
+  for (const auto& [name, t] : r.features) {
+    const double n = static_cast<double>(std::max<std::size_t>(t.sweeps, 1));
+    features[name] = {{"sweeps", t.sweeps},
+                      {"mean_points", static_cast<double>(t.points) / n},
+                      {"mean_edges", static_cast<double>(t.edges) / n},
+                      {"mean_planes", static_cast<double>(t.planes) / n},
+                      {"bad_frames", t.bad_frames}};
+  }
+  rep["features"] = features;
+  rep["timing"] = r.timing.toJson();
+  rep["wall_time_s"] = r.wall_time_s;
+  rep["realtime_factor"] = r.realtime_factor;
+  rep["mapping"] = r.mapping;
+  rep["timing_backend"] = r.timing_backend.toJson();
+
+  const RunReport::Dynamic& d = r.dynamic;
+  rep["dynamic"] = {{"enabled", d.enabled},
+                    {"feature_points_rejected", d.feature_points_rejected},
+                    {"sweeps_with_rejections", d.sweeps_with_rejections},
+                    {"local_map_points_carved", d.local_map_points_carved},
+                    {"clean_map", d.clean_map},
+                    {"map_points_judged", d.map_points_judged},
+                    {"map_points_removed", d.map_points_removed},
+                    {"dynamic_map_points", d.dynamic_map_points},
+                    {"map_assembly_s", d.map_assembly_s}};
+
+  if (!r.outputs.trajectory.empty()) {
+    Json& out = rep["outputs"];
+    out["trajectory"] = r.outputs.trajectory;
+    out["poses"] = r.outputs.poses;
+    out["map"] = r.outputs.map;
+    out["map_points"] = r.outputs.map_points;
+    out["map_voxel_m"] = r.outputs.map_voxel_m;
+    if (!r.outputs.per_lidar_maps.empty()) out["per_lidar_maps"] = r.outputs.per_lidar_maps;
+    if (!r.outputs.dynamic_map.empty()) out["dynamic_map"] = r.outputs.dynamic_map;
+  }
+  if (r.evaluation) rep["evaluation"] = evaluationJson(*r.evaluation);
+  rep["figures"] = Json::object();
+  for (const auto& [name, path] : r.figures) rep["figures"][name] = path;
+  return rep;
+}
+
+std::string toMarkdown(const RunReport& report) {
+  const Json rep = toJson(report);
+  std::string md = "# mmlio run report\n\n";
+  for (const auto& [k, v] : rep.items())
+    if (!v.is_object()) md += "- **" + k + "**: " + plainText(v) + "\n";
+  for (const auto& [k, v] : rep.items())
+    if (v.is_object() && k != "figures") renderSection(md, k, v);
+  if (!report.figures.empty()) {
+    md += "\n## figures\n";
+    for (const auto& [name, path] : report.figures) md += "\n![" + name + "](" + name + ".png)\n";
+  }
+  return md;
+}
+
+}  // namespace mmlio::pipeline

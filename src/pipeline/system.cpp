@@ -1,0 +1,152 @@
+#include "mmlio/pipeline/system.hpp"
+
+#include <filesystem>
+
+#include "mmlio/core/log.hpp"
+#include "mmlio/io/pcd_io.hpp"
+#include "mmlio/io/trajectory_writer.hpp"
+#include "mmlio/pipeline/odometry_setup.hpp"
+#include "mmlio/pipeline/report.hpp"
+
+namespace mmlio::pipeline {
+
+System::System(const io::RigConfig& cfg, const std::string& mode, SweepObserver observer)
+    : cfg_(cfg),
+      mode_(mode.empty() ? cfg.mode : mode),
+      observer_(std::move(observer)),
+      mapping_(mappingBackendConfig(cfg)),
+      degeneracy_(cfg.odometry.degenerate_min_points, cfg.odometry.remap_degenerate),
+      online_(cfg, mode_, [this](const estimator::SweepResult& r) { onSweep(r); }) {
+  dynamic_.enabled = cfg.dynamic.enabled;
+  dynamic_.clean_map = cfg.dynamic.clean_map;
+}
+
+void System::onSweep(const estimator::SweepResult& r) {
+  if (r.status == estimator::SweepResult::Status::kInitializing) {
+    ++sweeps_.initialising;
+    return;
+  }
+  if (r.status == estimator::SweepResult::Status::kDegraded) ++sweeps_.degraded;
+  else ++sweeps_.tracked;
+  Stopwatch handoff;
+  odometry_poses_.push_back({r.state.stamp_ns, r.state.pose()});
+  degeneracy_.add(r);
+  dynamic_.feature_points_rejected += r.dynamic_points;
+  dynamic_.sweeps_with_rejections += r.dynamic_points > 0;
+  dynamic_.local_map_points_carved += r.carved_points;
+  for (const auto& l : r.lidars) {
+    RunReport::LidarFigures& f = lidars_[l.sensor];
+    ++f.sweeps;
+    f.points += l.points;
+    f.edges += l.edges;
+    f.planes += l.planes;
+    f.bad_frames += l.bad_frame ? 1 : 0;
+  }
+  if (!finished_) mapping_.addSweep(r);  // a copy: the back end works on it on its own thread
+  StageTimes times = r.times_ms;
+  times.emplace_back("mapping_handoff", handoff.lapMs());
+  timing_.add(times);
+  if (observer_) observer_(r);
+}
+
+void System::finish() {
+  if (finished_) return;
+  finished_ = true;
+  try {
+    mapping_.finish();  // after an early stop too: what was queued still reaches the map
+  } catch (const std::exception& e) {  // a failed back end must not cost the trajectory
+    backend_error_ = e.what();
+    log::warn("mapping back end failed: ", e.what(), " (odometry trajectory and the map so far are written)");
+  }
+}
+
+Trajectory System::trajectory() const {
+  return mapping_.read([](const MappingBackend& b) { return b.correctedTrajectory(); });
+}
+
+Eigen::Isometry3d System::mapFromOdom() const {
+  return mapping_.read([](const MappingBackend& b) { return b.correction(); });
+}
+
+std::size_t System::loops() const {
+  return mapping_.read([](const MappingBackend& b) { return b.loops(); });
+}
+
+std::vector<Point> System::map() const {
+  return mapping_.read([](const MappingBackend& b) { return b.map(); });
+}
+
+RunReport System::report() const {
+  RunReport r;
+  r.input.mode = mode_;
+  r.input.config = cfg_.source_path;
+  r.input.imu_dropped = online_.imuGate().counts();
+  r.input.scans_out_of_order = online_.scanDrops().out_of_order;
+  r.input.scans_stamp_jumps = online_.scanDrops().jumped;
+  r.imu_init = odometry().imuInit();
+  r.sweeps = sweeps_;
+  r.sweeps.processed = online_.sweepsProcessed();
+  r.sweeps.keyframes = odometry().keyframes();
+  r.sweeps.degenerate = degeneracy_.degenerateSweeps();
+  r.degeneracy = degeneracy_.toJson(first_imu_ns_);
+  r.features = lidars_;
+  r.timing = timing_;
+  r.timing_backend = mapping_.timing();
+  r.wall_time_s = wall_.elapsedMs() * 1e-3;
+  const double sensor_s = first_imu_ns_ > 0 ? toSec(odometry().lastImuNs() - first_imu_ns_) : 0.0;
+  r.realtime_factor = r.wall_time_s > 0 ? sensor_s / r.wall_time_s : 0.0;
+  r.dynamic = dynamic_;
+  mapping_.read([&r](const MappingBackend& b) {
+    r.mapping = b.toJson();
+    r.dynamic.map_points_judged = b.ghostRemoval().judged_points;
+    r.dynamic.map_points_removed = b.ghostRemoval().removed_points;
+    return 0;
+  });
+  if (!backend_error_.empty()) r.mapping["error"] = backend_error_;
+  return r;
+}
+
+RunReport System::writeOutputs(const std::string& dir_path, RunReport report, const std::string& gt_path) const {
+  std::filesystem::create_directories(dir_path);
+  const std::string dir = dir_path + "/";
+  // One consistent snapshot of the back end: trajectory, maps and their figures.
+  Trajectory trajectory;
+  std::vector<Point> map_points, dynamic_map;
+  std::map<std::string, std::vector<Point>> lidar_maps;
+  Stopwatch assembly;
+  mapping_.read([&](const MappingBackend& b) {
+    trajectory = b.correctedTrajectory();
+    map_points = b.map();
+    if (cfg_.output.dynamic_map) dynamic_map = b.dynamicMap();
+    for (const std::string& lidar : b.lidarNames()) lidar_maps[lidar] = b.lidarMap(lidar);
+    return 0;
+  });
+  report.dynamic.map_assembly_s = assembly.elapsedMs() * 1e-3;
+  report.dynamic.dynamic_map_points = dynamic_map.size();
+
+  io::writeTum(dir + "trajectory.tum", trajectory);
+  if (cfg_.output.write_kitti) {
+    io::writeKitti(dir + "trajectory.kitti", trajectory);
+    io::writeKittiTimes(dir + "times.txt", trajectory);
+  }
+  io::writePcdBinary(dir + "map.pcd", map_points);
+  RunReport::Outputs& out = report.outputs;
+  out.trajectory = dir + "trajectory.tum";
+  out.poses = trajectory.size();
+  out.map = dir + "map.pcd";
+  out.map_points = map_points.size();
+  out.map_voxel_m = cfg_.output.map_voxel_m;
+  for (const auto& [lidar, points] : lidar_maps) {
+    const std::string path = dir + "map_" + lidar + ".pcd";
+    io::writePcdBinary(path, points);
+    out.per_lidar_maps[lidar] = path;
+  }
+  if (cfg_.output.dynamic_map) {
+    io::writePcdBinary(dir + "map_dynamic.pcd", dynamic_map);
+    out.dynamic_map = dir + "map_dynamic.pcd";
+  }
+  writeReports(dir, report, trajectory, map_points, gt_path);
+  return report;
+}
+
+}  // namespace mmlio::pipeline

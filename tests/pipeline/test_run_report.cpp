@@ -1,0 +1,72 @@
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <limits>
+
+#include "mmlio/pipeline/run_report.hpp"
+
+namespace mmlio::pipeline {
+namespace {
+
+RunReport sampleReport() {
+  RunReport r;
+  r.status = "degraded: input dropped";
+  r.input.source = "office.bag";
+  r.input.config = "config/hvi.yaml";
+  r.input.mode = "hvi";
+  r.input.duration_s = 43.025;
+  r.input.imu_messages = 8606;
+  r.input.imu_dropped.non_finite = 3;
+  r.input.decoded["velodyne"].kept = 1200;
+  r.imu_init.ok = true;
+  r.imu_init.message = "|g|=9.802 m/s^2";
+  r.sweeps.tracked = 420;
+  r.features["livox"].sweeps = 2;
+  r.features["livox"].edges = 30;
+  r.timing.add({{"features", 1.5}, {"registration", 2.5}});
+  r.wall_time_s = std::numeric_limits<double>::quiet_NaN();
+  return r;
+}
+
+TEST(RunReport, JsonKeepsSectionOrderAndWritesNonFiniteAsNull) {
+  const Json j = toJson(sampleReport());
+  std::vector<std::string> keys;
+  for (const auto& [k, v] : j.items()) keys.push_back(k);
+  ASSERT_GE(keys.size(), 4u);
+  EXPECT_EQ(keys[0], "status");
+  EXPECT_EQ(keys[1], "input");
+  EXPECT_EQ(j["input"]["source"], "office.bag");
+  EXPECT_EQ(j["input"]["imu_dropped"]["non_finite"], 3);
+  EXPECT_EQ(j["features"]["livox"]["mean_edges"], 15.0);
+  EXPECT_NE(j.dump().find("\"wall_time_s\":null"), std::string::npos);
+}
+
+TEST(RunReport, MarkdownShowsEveryFieldWithItsValue) {
+  const RunReport r = sampleReport();
+  const Json j = toJson(r);
+  const std::string md = toMarkdown(r);
+  // Every leaf of report.json appears in report.md under its own name, with a non-empty value.
+  std::function<void(const Json&, const std::string&)> check = [&](const Json& node, const std::string& path) {
+    for (const auto& [k, v] : node.items()) {
+      if (v.is_object() && !v.empty()) {
+        check(v, path + k + ".");
+        continue;
+      }
+      if (k == "figures") continue;  // pictures, shown as images
+      const std::size_t at = md.find(k);
+      ASSERT_NE(at, std::string::npos) << path + k << " missing from report.md";
+    }
+  };
+  check(j, "");
+  EXPECT_NE(md.find("| source | office.bag |"), std::string::npos);
+  EXPECT_NE(md.find("| config | config/hvi.yaml |"), std::string::npos);
+  EXPECT_NE(md.find("| mode | hvi |"), std::string::npos);
+  EXPECT_NE(md.find("| duration_s | 43.025 |"), std::string::npos);
+  // A '|' in a value must not split the table row.
+  EXPECT_NE(md.find("| message | \\|g\\|=9.802 m/s^2 |"), std::string::npos);
+  // Per-LiDAR figures: one row per LiDAR, one column per figure.
+  EXPECT_NE(md.find("| livox | 2 | 0 | 15 | 0 | 0 |"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace mmlio::pipeline
