@@ -1,34 +1,35 @@
-// mmlio_node: the live feeder of pipeline::OnlinePipeline (the same streaming core as `mmlio run`).
+// mmlio_node: the live feeder of pipeline::System, the same system `mmlio run` feeds from a bag
+// (odometry, mapping back end with live loop closure, report).
 //
-// Threads: the ROS spinner runs the subscription callbacks, which only enqueue the message
-// pointers into a bounded queue (a full queue drops the message and says so); ONE processing
-// thread decodes, feeds the pipeline and publishes. A slow sweep therefore never blocks the
-// spinner, and the estimator stays single-threaded and deterministic in its input order.
+// Threads: the ROS spinner runs the subscription and service callbacks, which only enqueue into a
+// bounded queue (a full queue drops the message and says so); ONE processing thread decodes, feeds
+// the System and publishes. A slow sweep therefore never blocks the spinner, and the System sees
+// its input in one order. The back end runs on the System's own thread.
+#include <ros/callback_queue.h>
 #include <ros/master.h>
 #include <ros/ros.h>
+#include <std_srvs/Trigger.h>
+#include <tf2_ros/transform_broadcaster.h>
 
 #include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
-#include <filesystem>
+#include <future>
 #include <iostream>
-#include <map>
 #include <memory>
-#include <optional>
 #include <thread>
 
 #include "bounded_queue.hpp"
 #include "imu_unit_gate.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
+#include "mmlio/core/so3.hpp"
 #include "mmlio/io/calib_file.hpp"
 #include "mmlio/io/cloud_decoders.hpp"
 #include "mmlio/io/livox_msg.hpp"
-#include "mmlio/io/pcd_io.hpp"
 #include "mmlio/io/rig_config.hpp"
-#include "mmlio/io/trajectory_writer.hpp"
-#include "mmlio/pipeline/map_accumulator.hpp"
-#include "mmlio/pipeline/online_pipeline.hpp"
+#include "mmlio/pipeline/system.hpp"
 #include "ros_messages.hpp"
 
 namespace mmlio::ros_node {
@@ -36,21 +37,26 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: mmlio_node [_config:=RIG.yaml] [_mode:=hvi|vi|hi] [_calib:=CALIB.yaml] [_out_dir:=DIR]\n"
-    "                  [_frame_id:=map] [_child_frame_id:=imu] [_map_every_n_keyframes:=1]\n"
+    "                  [_map_frame:=map] [_odom_frame:=odom] [_body_frame:=imu] [_publish_tf:=true]\n"
+    "                  [_map_publish_period_s:=5] [_point_sigma_m:=0.03]\n"
     "                  [_max_queued_scans:=10] [_max_queued_imu:=4000] [ROS remappings]\n"
-    "Live multi-LiDAR-inertial odometry: subscribes to the IMU and LiDAR topics of the rig config,\n"
-    "publishes ~pose (geometry_msgs/PoseStamped), ~transform (geometry_msgs/TransformStamped) and\n"
-    "~keyframe_cloud (sensor_msgs/PointCloud2, world frame); on shutdown writes trajectory.tum and\n"
-    "map.pcd into ~out_dir when set. Needs a running ROS master (ROS_MASTER_URI). See ros/README.md.\n";
+    "Live multi-LiDAR-inertial odometry and mapping: subscribes to the IMU and LiDAR topics of the rig\n"
+    "config; publishes ~odometry (nav_msgs/Odometry), ~path (nav_msgs/Path, corrected by loops), tf\n"
+    "map -> odom -> body, ~cloud_registered and ~map (sensor_msgs/PointCloud2); the ~save_map service\n"
+    "(std_srvs/Trigger) writes trajectory.tum, map.pcd and report.json into ~out_dir, as does shutdown.\n"
+    "Needs a running ROS master (ROS_MASTER_URI). See ros/README.md.\n";
 
 struct NodeParams {
   std::string config;                 // rig YAML; empty = built-in defaults (config/hvi.yaml)
   std::string mode;                   // hvi | vi | hi; empty = the config's
   std::string calib;                  // calibration YAML overriding the config's `calibration:`
-  std::string out_dir;                // trajectory.tum + map.pcd on shutdown; empty = none
-  std::string frame_id = "map";       // world frame of the published pose and clouds
-  std::string child_frame_id = "imu"; // body (IMU) frame
-  int map_every_n_keyframes = 1;      // publish the keyframe cloud every n-th keyframe; 0 = never
+  std::string out_dir;                // outputs on ~save_map and on shutdown; empty = none
+  std::string map_frame = "map";      // loop-corrected world frame (Path, map cloud)
+  std::string odom_frame = "odom";    // the odometry's world frame (Odometry, registered scan)
+  std::string body_frame = "imu";     // the IMU (body) frame the poses are of
+  bool publish_tf = true;             // map -> odom -> body through tf2
+  double map_publish_period_s = 5.0;  // ~map refresh (assembling it pauses the back end); 0 = never
+  double point_sigma_m = 0.03;        // LiDAR point noise behind the pose covariance
   int max_queued_scans = 10;          // LiDAR messages waiting for the processing thread
   int max_queued_imu = 4000;          // IMU messages waiting (20 s at 200 Hz)
 };
@@ -61,12 +67,19 @@ NodeParams readParams(const ros::NodeHandle& pnh) {
   pnh.param("mode", p.mode, p.mode);
   pnh.param("calib", p.calib, p.calib);
   pnh.param("out_dir", p.out_dir, p.out_dir);
-  pnh.param("frame_id", p.frame_id, p.frame_id);
-  pnh.param("child_frame_id", p.child_frame_id, p.child_frame_id);
-  pnh.param("map_every_n_keyframes", p.map_every_n_keyframes, p.map_every_n_keyframes);
+  pnh.param("map_frame", p.map_frame, p.map_frame);
+  pnh.param("odom_frame", p.odom_frame, p.odom_frame);
+  pnh.param("body_frame", p.body_frame, p.body_frame);
+  pnh.param("publish_tf", p.publish_tf, p.publish_tf);
+  pnh.param("map_publish_period_s", p.map_publish_period_s, p.map_publish_period_s);
+  pnh.param("point_sigma_m", p.point_sigma_m, p.point_sigma_m);
   pnh.param("max_queued_scans", p.max_queued_scans, p.max_queued_scans);
   pnh.param("max_queued_imu", p.max_queued_imu, p.max_queued_imu);
   if (p.max_queued_scans < 1 || p.max_queued_imu < 1) throw Error("~max_queued_scans and ~max_queued_imu must be >= 1");
+  if (!(p.point_sigma_m > 0.0)) throw Error("~point_sigma_m must be > 0");
+  if (p.map_frame.empty() || p.odom_frame.empty() || p.body_frame.empty() || p.map_frame == p.odom_frame ||
+      p.odom_frame == p.body_frame)
+    throw Error("~map_frame, ~odom_frame and ~body_frame must be distinct, non-empty frame names");
   return p;
 }
 
@@ -86,14 +99,16 @@ io::RigConfig loadConfig(const NodeParams& p) {
   return cfg;
 }
 
-/// One queued message: exactly one of the pointers is set.
+/// One queued item: exactly one of the pointers is set. A save request carries the promise its
+/// service call waits on.
 struct Message {
   sensor_msgs::Imu::ConstPtr imu;
   sensor_msgs::PointCloud2::ConstPtr cloud;
   boost::shared_ptr<const io::LivoxCustomMsg> livox;
+  std::shared_ptr<std::promise<std::string>> save;  // resolves to "" (written) or the error
   std::size_t lidar = 0;  // index into the active LiDARs
 };
-enum QueueClass : std::size_t { kImuClass = 0, kScanClass = 1 };
+enum QueueClass : std::size_t { kImuClass = 0, kScanClass = 1, kRequestClass = 2 };
 
 /// Datatype the master lists for `topic` (empty if nobody publishes it yet).
 std::string advertisedType(const std::string& topic) {
@@ -110,20 +125,25 @@ class Node {
  public:
   Node(ros::NodeHandle& nh, ros::NodeHandle& pnh, NodeParams params, const io::RigConfig& cfg)
       : params_(std::move(params)),
-        mode_(params_.mode.empty() ? cfg.mode : params_.mode),
-        queue_({static_cast<std::size_t>(params_.max_queued_imu), static_cast<std::size_t>(params_.max_queued_scans)}),
+        queue_({static_cast<std::size_t>(params_.max_queued_imu), static_cast<std::size_t>(params_.max_queued_scans), 8}),
         imu_gate_(cfg.imu.topic, cfg.imu.acc_unit),
-        pipeline_(cfg, mode_, [this](const estimator::SweepResult& r) { onSweep(r); }) {
-    if (!params_.out_dir.empty()) map_.emplace(cfg.output.map_voxel_m);
-    pose_pub_ = pnh.advertise<geometry_msgs::PoseStamped>("pose", 100);
-    transform_pub_ = pnh.advertise<geometry_msgs::TransformStamped>("transform", 100);
-    cloud_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("keyframe_cloud", 2);
+        system_(cfg, params_.mode, [this](const estimator::SweepResult& r) { onSweep(r); }) {
+    odometry_pub_ = pnh.advertise<nav_msgs::Odometry>("odometry", 100);
+    path_pub_ = pnh.advertise<nav_msgs::Path>("path", 1, /*latch=*/true);
+    scan_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("cloud_registered", 2);
+    map_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("map", 1, /*latch=*/true);
+    // The service waits for the processing thread: its own queue and spinner keep the sensor
+    // callbacks flowing meanwhile.
+    ros::NodeHandle service_nh(pnh);
+    service_nh.setCallbackQueue(&service_queue_);
+    save_srv_ = service_nh.advertiseService("save_map", &Node::onSaveMap, this);
+    service_spinner_.start();
 
     subs_.push_back(nh.subscribe<sensor_msgs::Imu>(
-        cfg.imu.topic, 2000, [this](const sensor_msgs::Imu::ConstPtr& m) { enqueue(kImuClass, {m, {}, {}, 0}); },
+        cfg.imu.topic, 2000, [this](const sensor_msgs::Imu::ConstPtr& m) { enqueue(kImuClass, {m, {}, {}, {}, 0}); },
         ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
-    log::info("mode ", mode_, ", IMU ", cfg.imu.topic, " (sensor_msgs/Imu, acc unit ", cfg.imu.acc_unit, ")");
-    for (const io::LidarConfig* l : io::activeLidars(cfg, mode_)) subscribeLidar(nh, *l);
+    log::info("mode ", system_.mode(), ", IMU ", cfg.imu.topic, " (sensor_msgs/Imu, acc unit ", cfg.imu.acc_unit, ")");
+    for (const io::LidarConfig* l : io::activeLidars(cfg, system_.mode())) subscribeLidar(nh, *l);
     worker_ = std::thread([this] { run(); });
   }
 
@@ -132,13 +152,17 @@ class Node {
     if (worker_.joinable()) worker_.join();
   }
 
-  /// After the spinner stopped: processes what is queued, flushes, writes the outputs.
+  /// After the spinner stopped: processes what is queued, flushes, finishes the back end (a last
+  /// loop check) and writes the outputs.
   void finish() {
     queue_.close();
     if (worker_.joinable()) worker_.join();
-    log::info(pipeline_.sweepsProcessed(), " sweeps, ", trajectory_.size(), " poses; dropped ", queue_.dropped(kImuClass),
-              " IMU and ", queue_.dropped(kScanClass), " LiDAR messages (queue full)");
-    writeOutputs();
+    log::info(system_.sweepsProcessed(), " sweeps, ", system_.odometryTrajectory().size(), " poses, ",
+              system_.loops(), " loops; dropped ", queue_.dropped(kImuClass), " IMU and ", queue_.dropped(kScanClass),
+              " LiDAR messages (queue full)");
+    if (params_.out_dir.empty()) return;
+    const std::string error = save();
+    if (!error.empty()) log::error("cannot write the outputs: ", error);
   }
 
  private:
@@ -162,7 +186,7 @@ class Node {
       // layout and MD5 under another package name, so take the name the master advertises.
       ros::SubscribeOptions ops;
       ops.init<io::LivoxCustomMsg>(l.topic, 10, [this, index](const boost::shared_ptr<const io::LivoxCustomMsg>& m) {
-        enqueue(kScanClass, {{}, {}, m, index});
+        enqueue(kScanClass, {{}, {}, m, {}, index});
       });
       if (advertisedType(l.topic) == io::kLivox2CustomMsgType) ops.datatype = io::kLivox2CustomMsgType;
       ops.transport_hints = ros::TransportHints().tcpNoDelay();
@@ -171,7 +195,7 @@ class Node {
     } else {
       subs_.push_back(nh.subscribe<sensor_msgs::PointCloud2>(
           l.topic, 10,
-          [this, index](const sensor_msgs::PointCloud2::ConstPtr& m) { enqueue(kScanClass, {{}, m, {}, index}); },
+          [this, index](const sensor_msgs::PointCloud2::ConstPtr& m) { enqueue(kScanClass, {{}, m, {}, {}, index}); },
           ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
       log::info("LiDAR '", l.name, "' on ", l.topic, " (sensor_msgs/PointCloud2)");
     }
@@ -185,6 +209,26 @@ class Node {
     }
   }
 
+  /// Spinner thread: the processing thread writes the files between two messages.
+  bool onSaveMap(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+    if (params_.out_dir.empty()) {
+      res.success = false;
+      res.message = "~out_dir is not set";
+      return true;
+    }
+    auto done = std::make_shared<std::promise<std::string>>();
+    std::future<std::string> result = done->get_future();
+    if (!queue_.push(kRequestClass, {{}, {}, {}, done, 0})) {
+      res.success = false;
+      res.message = "busy or shutting down: try again";
+      return true;
+    }
+    const std::string error = result.get();
+    res.success = error.empty();
+    res.message = error.empty() ? "wrote trajectory.tum, map.pcd, report.json to " + params_.out_dir : error;
+    return true;
+  }
+
   /// Processing thread.
   void run() {
     Message m;
@@ -196,16 +240,22 @@ class Node {
       }
     }
     try {
-      for (const ImuSample& s : imu_gate_.release()) pipeline_.addImu(s);
-      pipeline_.flush();
+      for (const ImuSample& s : imu_gate_.release()) system_.addImu(s);
+      system_.flush();
     } catch (const std::exception& e) {
       log::error("at shutdown: ", e.what());
     }
+    system_.finish();
   }
 
   void process(const Message& m) {
+    if (m.save) {
+      m.save->set_value(save());
+      return;
+    }
     if (m.imu) {
-      for (const ImuSample& s : imu_gate_.add(*m.imu)) pipeline_.addImu(s);
+      ++imu_messages_;
+      for (const ImuSample& s : imu_gate_.add(*m.imu)) system_.addImu(s);
       return;
     }
     io::CloudDecodeOptions& d = decode_[m.lidar];
@@ -221,60 +271,90 @@ class Node {
     } else {
       scan = io::decodeLivox(*m.livox, d);
     }
-    if (!scan.points.empty()) pipeline_.addScan(std::move(scan));
+    if (!scan.points.empty()) system_.addScan(std::move(scan));
   }
 
-  /// Called by the pipeline on the processing thread.
+  /// Processing thread: the System calls it for every sweep after initialisation.
   void onSweep(const estimator::SweepResult& r) {
     using Status = estimator::SweepResult::Status;
-    if (r.status == Status::kInitializing) return;
     if (r.status == Status::kDegraded && ++degraded_ % 50 == 1) {
       log::warn("degraded sweep (", degraded_, " so far): ", r.note);
     }
-    const Eigen::Isometry3d T_world_body = r.state.pose();
-    trajectory_.push_back({r.state.stamp_ns, T_world_body});
-    if (map_) map_->add(r.points_body, T_world_body);
+    const Eigen::Isometry3d T_odom_body = r.state.pose();
+    Eigen::Vector3d omega_body = Eigen::Vector3d::Zero();  // from the previous sweep's attitude
+    if (last_stamp_ns_pose_ > 0 && r.state.stamp_ns > last_stamp_ns_pose_)
+      omega_body = so3::log(last_q_.conjugate() * r.state.q_world_body) / toSec(r.state.stamp_ns - last_stamp_ns_pose_);
+    last_q_ = r.state.q_world_body;
+    last_stamp_ns_pose_ = r.state.stamp_ns;
     if (!ros::ok()) return;  // draining the queue after shutdown: outputs only
-    pose_pub_.publish(toPoseStamped(r.state, params_.frame_id));
-    transform_pub_.publish(toTransformStamped(r.state, params_.frame_id, params_.child_frame_id));
+
+    odometry_pub_.publish(toOdometry(r.state, T_odom_body, omega_body,
+                                     poseCovariance(r.degeneracy, r.state.q_world_body, params_.point_sigma_m),
+                                     params_.odom_frame, params_.body_frame));
+    if (params_.publish_tf) {
+      // map -> odom only changes when a loop closes; it is sent with every pose so tf can
+      // interpolate both at the pose's stamp.
+      const Eigen::Isometry3d T_map_odom = r.keyframe || !map_odom_known_ ? system_.mapFromOdom() : T_map_odom_;
+      T_map_odom_ = T_map_odom;
+      map_odom_known_ = true;
+      tf_.sendTransform({toTransform(T_map_odom, r.state.stamp_ns, params_.map_frame, params_.odom_frame),
+                         toTransform(T_odom_body, r.state.stamp_ns, params_.odom_frame, params_.body_frame)});
+    }
+    if (scan_pub_.getNumSubscribers() > 0)
+      scan_pub_.publish(toPointCloud2(r.points_body, T_odom_body, r.state.stamp_ns, params_.odom_frame));
     if (!r.keyframe) return;
-    ++keyframes_;
-    const int n = params_.map_every_n_keyframes;
-    if (n > 0 && keyframes_ % static_cast<std::size_t>(n) == 0 && cloud_pub_.getNumSubscribers() > 0) {
-      cloud_pub_.publish(toPointCloud2(r.points_body, T_world_body, r.state.stamp_ns, params_.frame_id));
+    // Keyframes: the corrected path (loops move it), and now and then the global map.
+    if (path_pub_.getNumSubscribers() > 0) path_pub_.publish(toPath(system_.trajectory(), params_.map_frame));
+    const double since_map_s = toSec(r.state.stamp_ns - last_map_ns_);
+    if (params_.map_publish_period_s > 0 && since_map_s >= params_.map_publish_period_s &&
+        map_pub_.getNumSubscribers() > 0) {
+      map_pub_.publish(toPointCloud2(system_.map(), Eigen::Isometry3d::Identity(), r.state.stamp_ns, params_.map_frame));
+      last_map_ns_ = r.state.stamp_ns;
     }
   }
 
-  void writeOutputs() {
-    if (params_.out_dir.empty()) return;
-    if (trajectory_.empty()) {
-      log::warn("no pose was estimated; nothing written to ", params_.out_dir);
-      return;
-    }
+  /// Processing thread: trajectory.tum, map.pcd, report.json/.md into out_dir. "" or the error.
+  std::string save() {
+    if (system_.odometryTrajectory().empty()) return "no pose estimated yet: nothing written";
     try {
-      std::filesystem::create_directories(params_.out_dir);
-      const std::string tum = params_.out_dir + "/trajectory.tum", pcd = params_.out_dir + "/map.pcd";
-      io::writeTum(tum, trajectory_);
-      const std::vector<Point> points = map_->points();
-      io::writePcdBinary(pcd, points);
-      log::info("wrote ", tum, " (", trajectory_.size(), " poses) and ", pcd, " (", points.size(), " points)");
+      pipeline::RunReport report = system_.report();
+      report.input.source = "live";
+      report.input.imu_messages = imu_messages_;
+      report.input.imu_acc_scale = imu_gate_.decided() ? imu_gate_.accScale() : 1.0;
+      report.input.queue_dropped_imu = queue_.dropped(kImuClass);
+      report.input.queue_dropped_scans = queue_.dropped(kScanClass);
+      const Trajectory& odometry = system_.odometryTrajectory();
+      report.input.duration_s = toSec(odometry.back().stamp_ns - odometry.front().stamp_ns);
+      report.status = report.inputDegraded() ? "degraded: input dropped (see input.queue_dropped, input.imu_dropped, "
+                                               "input.scans_dropped)"
+                                             : "complete";
+      report = system_.writeOutputs(params_.out_dir, std::move(report));
+      log::info("wrote ", report.outputs.trajectory, " (", report.outputs.poses, " poses), ", report.outputs.map, " (",
+                report.outputs.map_points, " points) and the report");
+      return "";
     } catch (const std::exception& e) {
-      log::error("cannot write the outputs: ", e.what());
+      return e.what();
     }
   }
 
   NodeParams params_;
-  std::string mode_;
-  BoundedQueue<Message, 2> queue_;
+  BoundedQueue<Message, 3> queue_;
   // Processing thread only, from here on.
   ImuUnitGate imu_gate_;
+  std::size_t imu_messages_ = 0;
   std::vector<io::CloudDecodeOptions> decode_;  // per active LiDAR (written before the thread starts)
   std::vector<Stamp> last_stamp_ns_;
-  pipeline::OnlinePipeline pipeline_;
-  std::optional<pipeline::MapAccumulator> map_;
-  Trajectory trajectory_;
-  std::size_t keyframes_ = 0, degraded_ = 0;
-  ros::Publisher pose_pub_, transform_pub_, cloud_pub_;
+  pipeline::System system_;
+  std::size_t degraded_ = 0;
+  Eigen::Quaterniond last_q_ = Eigen::Quaterniond::Identity();
+  Stamp last_stamp_ns_pose_ = 0, last_map_ns_ = 0;
+  Eigen::Isometry3d T_map_odom_ = Eigen::Isometry3d::Identity();
+  bool map_odom_known_ = false;
+  ros::Publisher odometry_pub_, path_pub_, scan_pub_, map_pub_;
+  ros::CallbackQueue service_queue_;
+  ros::AsyncSpinner service_spinner_{1, &service_queue_};
+  ros::ServiceServer save_srv_;
+  tf2_ros::TransformBroadcaster tf_;
   std::vector<ros::Subscriber> subs_;
   std::thread worker_;
 };

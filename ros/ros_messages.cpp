@@ -1,5 +1,7 @@
 #include "ros_messages.hpp"
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cstring>
 
 namespace mmlio::ros_node {
@@ -42,32 +44,86 @@ sensor_msgs::PointCloud2 toPointCloud2(const std::vector<Point>& points, const E
   return msg;
 }
 
-geometry_msgs::PoseStamped toPoseStamped(const NavState& state, const std::string& frame_id) {
-  geometry_msgs::PoseStamped msg;
-  msg.header.stamp = toRosTime(state.stamp_ns);
+geometry_msgs::Pose toPose(const Eigen::Isometry3d& T) {
+  geometry_msgs::Pose pose;
+  const Eigen::Quaterniond q(T.linear());
+  pose.position.x = T.translation().x();
+  pose.position.y = T.translation().y();
+  pose.position.z = T.translation().z();
+  pose.orientation.x = q.x();
+  pose.orientation.y = q.y();
+  pose.orientation.z = q.z();
+  pose.orientation.w = q.w();
+  return pose;
+}
+
+geometry_msgs::TransformStamped toTransform(const Eigen::Isometry3d& T, Stamp stamp_ns, const std::string& frame_id,
+                                            const std::string& child_frame_id) {
+  const geometry_msgs::Pose pose = toPose(T);
+  geometry_msgs::TransformStamped msg;
+  msg.header.stamp = toRosTime(stamp_ns);
   msg.header.frame_id = frame_id;
-  const Eigen::Quaterniond q = state.q_world_body.normalized();
-  msg.pose.position.x = state.p_world.x();
-  msg.pose.position.y = state.p_world.y();
-  msg.pose.position.z = state.p_world.z();
-  msg.pose.orientation.x = q.x();
-  msg.pose.orientation.y = q.y();
-  msg.pose.orientation.z = q.z();
-  msg.pose.orientation.w = q.w();
+  msg.child_frame_id = child_frame_id;
+  msg.transform.translation.x = pose.position.x;
+  msg.transform.translation.y = pose.position.y;
+  msg.transform.translation.z = pose.position.z;
+  msg.transform.rotation = pose.orientation;
   return msg;
 }
 
-geometry_msgs::TransformStamped toTransformStamped(const NavState& state, const std::string& frame_id,
-                                                   const std::string& child_frame_id) {
-  const geometry_msgs::PoseStamped pose = toPoseStamped(state, frame_id);
-  geometry_msgs::TransformStamped msg;
-  msg.header = pose.header;
+std::array<double, 36> poseCovariance(const estimator::Degeneracy& d, const Eigen::Quaterniond& q_world_body,
+                                      double point_sigma_m, double max_variance) {
+  const double s2 = point_sigma_m * point_sigma_m;
+  const auto block = [&](const Eigen::Matrix3d& basis, const Eigen::Vector3d& eigenvalues) {
+    Eigen::Vector3d variance;
+    for (int i = 0; i < 3; ++i) variance[i] = eigenvalues[i] > s2 / max_variance ? s2 / eigenvalues[i] : max_variance;
+    return Eigen::Matrix3d(basis * variance.asDiagonal() * basis.transpose());
+  };
+  const Eigen::Matrix3d R = q_world_body.toRotationMatrix();
+  const Eigen::Matrix3d translation = block(d.translation_basis, d.translation_eigenvalues);  // world axes
+  const Eigen::Matrix3d rotation = R * block(d.rotation_basis, d.rotation_eigenvalues) * R.transpose();  // body -> world
+  std::array<double, 36> out{};
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) {
+      out[static_cast<std::size_t>(6 * r + c)] = translation(r, c);
+      out[static_cast<std::size_t>(6 * (r + 3) + c + 3)] = rotation(r, c);
+    }
+  return out;
+}
+
+nav_msgs::Odometry toOdometry(const NavState& state, const Eigen::Isometry3d& T_frame_body,
+                              const Eigen::Vector3d& angular_velocity_body, const std::array<double, 36>& pose_covariance,
+                              const std::string& frame_id, const std::string& child_frame_id) {
+  nav_msgs::Odometry msg;
+  msg.header.stamp = toRosTime(state.stamp_ns);
+  msg.header.frame_id = frame_id;
   msg.child_frame_id = child_frame_id;
-  msg.transform.translation.x = pose.pose.position.x;
-  msg.transform.translation.y = pose.pose.position.y;
-  msg.transform.translation.z = pose.pose.position.z;
-  msg.transform.rotation = pose.pose.orientation;
+  msg.pose.pose = toPose(T_frame_body);
+  std::copy(pose_covariance.begin(), pose_covariance.end(), msg.pose.covariance.begin());
+  const Eigen::Vector3d v_body = state.q_world_body.conjugate() * state.v_world;
+  msg.twist.twist.linear.x = v_body.x();
+  msg.twist.twist.linear.y = v_body.y();
+  msg.twist.twist.linear.z = v_body.z();
+  msg.twist.twist.angular.x = angular_velocity_body.x();
+  msg.twist.twist.angular.y = angular_velocity_body.y();
+  msg.twist.twist.angular.z = angular_velocity_body.z();
+  for (int i = 0; i < 6; ++i) msg.twist.covariance[static_cast<std::size_t>(7 * i)] = -1.0;
   return msg;
+}
+
+nav_msgs::Path toPath(const Trajectory& trajectory, const std::string& frame_id) {
+  nav_msgs::Path path;
+  path.header.frame_id = frame_id;
+  if (!trajectory.empty()) path.header.stamp = toRosTime(trajectory.back().stamp_ns);
+  path.poses.reserve(trajectory.size());
+  for (const StampedPose& p : trajectory) {
+    geometry_msgs::PoseStamped ps;
+    ps.header.stamp = toRosTime(p.stamp_ns);
+    ps.header.frame_id = frame_id;
+    ps.pose = toPose(p.T_world_body);
+    path.poses.push_back(ps);
+  }
+  return path;
 }
 
 }  // namespace mmlio::ros_node

@@ -1,15 +1,18 @@
 #pragma once
-// Core types -> ROS messages for what the node publishes. Stateless, no estimation.
-#include <geometry_msgs/PoseStamped.h>
+// Core types -> the ROS messages the node publishes. Stateless, no estimation.
 #include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/Odometry.h>
+#include <nav_msgs/Path.h>
 #include <ros/time.h>
 #include <sensor_msgs/PointCloud2.h>
 
 #include <Eigen/Geometry>
+#include <array>
 #include <string>
 #include <vector>
 
 #include "mmlio/core/types.hpp"
+#include "mmlio/estimator/degeneracy.hpp"
 
 namespace mmlio::ros_node {
 
@@ -17,14 +20,28 @@ namespace mmlio::ros_node {
 ros::Time toRosTime(Stamp stamp_ns);
 
 /// Points (x y z intensity, float32, point_step 16, dense, little endian) moved by T_frame_points
-/// into `frame_id`, e.g. body-frame sweep points with T_world_body into "map".
+/// into `frame_id`, e.g. body-frame sweep points with T_odom_body into "odom".
 sensor_msgs::PointCloud2 toPointCloud2(const std::vector<Point>& points, const Eigen::Isometry3d& T_frame_points,
                                        Stamp stamp_ns, const std::string& frame_id);
 
-/// The pose T_frame_body of `state` in `frame_id`, stamped at state.stamp_ns.
-geometry_msgs::PoseStamped toPoseStamped(const NavState& state, const std::string& frame_id);
-/// Same as a transform frame_id <- child_frame_id (what a tf broadcaster would send).
-geometry_msgs::TransformStamped toTransformStamped(const NavState& state, const std::string& frame_id,
-                                                   const std::string& child_frame_id);
+geometry_msgs::Pose toPose(const Eigen::Isometry3d& T);
+/// frame_id <- child_frame_id.
+geometry_msgs::TransformStamped toTransform(const Eigen::Isometry3d& T_frame_child, Stamp stamp_ns,
+                                            const std::string& frame_id, const std::string& child_frame_id);
+
+/// Pose covariance (ROS order x y z, rotation about x y z; both in `frame_id`'s axes) from what the
+/// sweep's LiDAR matches constrain: sigma^2 / eigenvalue along each eigenvector of the translation
+/// and rotation information (point_sigma_m: the matches' point noise). Directions the LiDARs do not
+/// observe (a corridor's axis) get a large variance, capped at max_variance.
+std::array<double, 36> poseCovariance(const estimator::Degeneracy& d, const Eigen::Quaterniond& q_world_body,
+                                      double point_sigma_m, double max_variance = 1e4);
+
+/// nav_msgs/Odometry: pose of child_frame_id in frame_id, twist in child_frame_id (REP 105).
+/// Twist covariance is not estimated: its diagonal is -1.
+nav_msgs::Odometry toOdometry(const NavState& state, const Eigen::Isometry3d& T_frame_body,
+                              const Eigen::Vector3d& angular_velocity_body, const std::array<double, 36>& pose_covariance,
+                              const std::string& frame_id, const std::string& child_frame_id);
+
+nav_msgs::Path toPath(const Trajectory& trajectory, const std::string& frame_id);
 
 }  // namespace mmlio::ros_node

@@ -127,21 +127,58 @@ TEST(RosMessages, CloudIsMovedIntoTheTargetFrameWithIntensity) {
   EXPECT_EQ(v[3], 42.f);
 }
 
-TEST(RosMessages, PoseAndTransformCarryTheStateInTheirFrames) {
+TEST(RosMessages, OdometryCarriesPoseInItsFrameAndTwistInTheBodyFrame) {
   NavState s;
   s.stamp_ns = 2'000'000'001;
   s.p_world = {1, 2, 3};
-  s.q_world_body = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()));
-  const auto pose = toPoseStamped(s, "map");
-  EXPECT_EQ(pose.header.frame_id, "map");
-  EXPECT_EQ(pose.header.stamp.toNSec(), 2'000'000'001u);
-  EXPECT_DOUBLE_EQ(pose.pose.position.z, 3.0);
-  EXPECT_NEAR(pose.pose.orientation.x, std::sin(0.15), 1e-12);
-  EXPECT_NEAR(pose.pose.orientation.w, std::cos(0.15), 1e-12);
-  const auto tf = toTransformStamped(s, "map", "imu");
-  EXPECT_EQ(tf.child_frame_id, "imu");
+  s.q_world_body = Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()));
+  s.v_world = {0, 1, 0};  // along the body's x axis (yawed 90 deg)
+  std::array<double, 36> cov{};
+  cov[0] = 0.25;
+  const auto odom = toOdometry(s, s.pose(), {0, 0, 0.5}, cov, "odom", "imu");
+  EXPECT_EQ(odom.header.frame_id, "odom");
+  EXPECT_EQ(odom.child_frame_id, "imu");
+  EXPECT_EQ(odom.header.stamp.toNSec(), 2'000'000'001u);
+  EXPECT_DOUBLE_EQ(odom.pose.pose.position.z, 3.0);
+  EXPECT_NEAR(odom.pose.pose.orientation.z, std::sin(M_PI / 4), 1e-12);
+  EXPECT_NEAR(odom.twist.twist.linear.x, 1.0, 1e-12);
+  EXPECT_NEAR(odom.twist.twist.linear.y, 0.0, 1e-12);
+  EXPECT_DOUBLE_EQ(odom.twist.twist.angular.z, 0.5);
+  EXPECT_DOUBLE_EQ(odom.pose.covariance[0], 0.25);
+  EXPECT_DOUBLE_EQ(odom.twist.covariance[0], -1.0);  // not estimated
+}
+
+TEST(RosMessages, CovarianceIsLargeAlongWhatTheLidarsDoNotObserve) {
+  // A corridor along world x: translation information tiny along x, strong across; rotation strong.
+  estimator::Degeneracy d;
+  d.translation_basis = Eigen::Matrix3d::Identity();  // columns: x, y, z
+  d.translation_eigenvalues = {1e-9, 400.0, 900.0};
+  d.rotation_eigenvalues = {100.0, 100.0, 100.0};
+  const Eigen::Quaterniond yaw(Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()));
+  const auto c = poseCovariance(d, yaw, 0.02, 1e4);
+  EXPECT_DOUBLE_EQ(c[0], 1e4);                        // unobserved: capped
+  EXPECT_NEAR(c[7], 0.02 * 0.02 / 400.0, 1e-15);      // sigma^2 / eigenvalue
+  EXPECT_NEAR(c[14], 0.02 * 0.02 / 900.0, 1e-15);
+  EXPECT_NEAR(c[21], 0.02 * 0.02 / 100.0, 1e-15);     // isotropic rotation stays so in any frame
+  EXPECT_NEAR(c[1], 0.0, 1e-15);
+  EXPECT_NEAR(c[3], 0.0, 1e-15);                      // no translation-rotation coupling given
+}
+
+TEST(RosMessages, TransformAndPathCarryPosesInTheirFrames) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  T.translation() = Eigen::Vector3d(1, 2, 3);
+  const auto tf = toTransform(T, 5'000'000'000, "map", "odom");
+  EXPECT_EQ(tf.header.frame_id, "map");
+  EXPECT_EQ(tf.child_frame_id, "odom");
   EXPECT_DOUBLE_EQ(tf.transform.translation.y, 2.0);
-  EXPECT_NEAR(tf.transform.rotation.x, std::sin(0.15), 1e-12);
+  EXPECT_NEAR(std::abs(tf.transform.rotation.x), std::sin(0.15), 1e-12);
+  const auto path = toPath({{1'000'000'000, Eigen::Isometry3d::Identity()}, {2'000'000'000, T}}, "map");
+  ASSERT_EQ(path.poses.size(), 2u);
+  EXPECT_EQ(path.header.frame_id, "map");
+  EXPECT_EQ(path.header.stamp.toNSec(), 2'000'000'000u);
+  EXPECT_EQ(path.poses[1].header.frame_id, "map");
+  EXPECT_DOUBLE_EQ(path.poses[1].pose.position.x, 1.0);
 }
 
 }  // namespace

@@ -125,6 +125,7 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
   report.dynamic.dynamic_map_points = dynamic_map.size();
 
   io::writeTum(dir + "trajectory.tum", trajectory);
+  io::writeTum(dir + "trajectory_odometry.tum", odometry_poses_);  // before loop correction
   if (cfg_.output.write_kitti) {
     io::writeKitti(dir + "trajectory.kitti", trajectory);
     io::writeKittiTimes(dir + "times.txt", trajectory);

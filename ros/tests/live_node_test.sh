@@ -1,0 +1,134 @@
+#!/usr/bin/env bash
+# mmlio_node against the real thing (Debian ros-core): roscore on a free port, the node, `rosbag play`
+# of a short simulated office bag (30 s out and back, so loops close), `rosbag record` of what the
+# node publishes. Checks the topics' types and rates, the tf tree map -> odom -> imu, the ~save_map
+# service, that the node's odometry equals `mmlio run`'s on the same bag and that its loop-corrected
+# trajectory scores within 5 % of it, with the loops listed in its report.
+# Usage: live_node_test.sh MMLIO MMLIO_NODE CONFIG_DIR
+set -euo pipefail
+MMLIO="$1" NODE="$2" CONFIG_DIR="$3"
+export PATH="/usr/bin:/bin:$PATH"  # ROS1's Python tools need the system python3
+for tool in roscore rosbag rostopic rosservice; do
+  command -v "$tool" > /dev/null || { echo "FAIL: $tool not found (Debian: ros-core; scripts/install-deps.sh)"; exit 1; }
+done
+
+work=$(mktemp -d /tmp/mmlio-live-test.XXXXXX)
+export ROS_HOME="$work/ros_home" ROS_LOG_DIR="$work/ros_log" ROS_IP=127.0.0.1  # no reliance on the host name
+pids=()
+cleanup() {
+  for p in "${pids[@]}"; do kill -INT "$p" 2> /dev/null || true; done
+  sleep 1
+  for p in "${pids[@]}"; do kill -KILL "$p" 2> /dev/null || true; done
+  rm -rf "$work"
+}
+trap cleanup EXIT
+fail() { echo "FAIL: $*"; for f in "$work"/*.log "$work"/*.txt; do echo "--- $f"; tail -20 "$f"; done; exit 1; }
+wait_for() {  # wait_for SECONDS COMMAND...: until COMMAND succeeds
+  local until=$((SECONDS + $1)); shift
+  until "$@" > /dev/null 2>&1; do [ $SECONDS -lt $until ] || return 1; sleep 0.3; done
+}
+
+"$MMLIO" -q simulate --scenario office --duration 30 --seed 5 --out "$work/sim" > /dev/null 2>&1 || fail "simulate"
+bag="$work/sim/office.bag" truth="$work/sim/office_truth.yaml" gt="$work/sim/office_gt.tum"
+"$MMLIO" -q run "$bag" --config "$CONFIG_DIR/hvi.yaml" --calib "$truth" --no-progress --out "$work/run" \
+  > "$work/run.log" 2>&1 || fail "mmlio run"
+
+port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+export ROS_MASTER_URI="http://127.0.0.1:$port"
+roscore -p "$port" > "$work/roscore.log" 2>&1 &
+pids+=($!)
+wait_for 30 rostopic list || fail "roscore did not come up on port $port"
+
+stdbuf -oL -eL "$NODE" _config:="$CONFIG_DIR/hvi.yaml" _calib:="$truth" _out_dir:="$work/node" _map_publish_period_s:=2 \
+  > "$work/node.log" 2>&1 &
+node_pid=$!
+pids+=($node_pid)
+wait_for 30 rosservice find std_srvs/Trigger || fail "the node's ~save_map service never appeared"
+for t in odometry path cloud_registered map; do
+  wait_for 10 rostopic info "/mmlio_node/$t" || fail "/mmlio_node/$t not advertised"
+done
+
+rosbag record -q -O "$work/out.bag" /mmlio_node/odometry /mmlio_node/path /mmlio_node/map /tf \
+  > "$work/record.log" 2>&1 &
+record_pid=$!
+pids+=($record_pid)
+subscribed() { rostopic info /mmlio_node/odometry | grep -q "record"; }
+wait_for 20 subscribed || fail "rosbag record did not subscribe"
+( timeout 60 rostopic echo -n 1 --noarr /mmlio_node/cloud_registered/header > "$work/cloud_header.txt" 2>&1 ) &
+echo_pid=$!
+
+rosbag play -q --wait-for-subscribers "$bag" > "$work/play.log" 2>&1 || fail "rosbag play"
+wait "$echo_pid" || fail "no registered scan arrived"
+grep -q "frame_id: \"odom\"" "$work/cloud_header.txt" || fail "registered scan not in the odom frame"
+
+# The node catches up with what it queued, then saves while running, then shuts down.
+sleep 3
+save=$(rosservice call /mmlio_node/save_map)
+echo "$save" | grep -q "success: True" || fail "~save_map: $save"
+[ -s "$work/node/trajectory.tum" ] && [ -s "$work/node/map.pcd" ] && [ -s "$work/node/report.json" ] ||
+  fail "~save_map wrote no trajectory, map or report"
+rm -f "$work/node/trajectory.tum"
+kill -INT "$record_pid"; wait "$record_pid" || true
+kill -INT "$node_pid"
+for _ in $(seq 100); do kill -0 "$node_pid" 2> /dev/null || break; sleep 0.3; done
+kill -0 "$node_pid" 2> /dev/null && fail "the node did not stop on SIGINT"
+[ -s "$work/node/trajectory.tum" ] || fail "no trajectory written on shutdown"
+
+ate() { "$MMLIO" evaluate --gt "$gt" --est "$1" --json | python3 -c 'import json,sys; print(json.load(sys.stdin)["ate_rmse_m"])'; }
+run_ate=$(ate "$work/run/trajectory.tum")
+node_ate=$(ate "$work/node/trajectory.tum")
+
+python3 - "$work" "$run_ate" "$node_ate" << 'PY' || fail "checks above"
+import json, sys
+import rosbag
+
+work, run_ate, node_ate = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])
+errors = []
+def check(ok, what):
+    print(("ok    " if ok else "FAIL  ") + what)
+    if not ok:
+        errors.append(what)
+
+def read_tum(path):
+    return [line.split() for line in open(path) if line.strip() and not line.startswith("#")]
+
+bag = rosbag.Bag(f"{work}/out.bag")
+info = bag.get_type_and_topic_info().topics
+types = {t: info[t].msg_type for t in info}
+check(types.get("/mmlio_node/odometry") == "nav_msgs/Odometry", f"odometry is nav_msgs/Odometry ({types.get('/mmlio_node/odometry')})")
+check(types.get("/mmlio_node/path") == "nav_msgs/Path", "path is nav_msgs/Path")
+check(types.get("/mmlio_node/map") == "sensor_msgs/PointCloud2", "map is sensor_msgs/PointCloud2")
+check(types.get("/tf") == "tf2_msgs/TFMessage", "tf is tf2_msgs/TFMessage")
+
+odom = [m for _, m, _ in bag.read_messages(topics=["/mmlio_node/odometry"])]
+stamps = [m.header.stamp.to_sec() for m in odom]
+rate = (len(stamps) - 1) / (stamps[-1] - stamps[0]) if len(stamps) > 1 else 0.0
+check(rate > 9.0 and rate < 11.0, f"odometry at the sweep rate: {rate:.2f} Hz over {len(odom)} messages")
+check(all(m.header.frame_id == "odom" and m.child_frame_id == "imu" for m in odom), "odometry: odom -> imu")
+check(all(m.pose.covariance[0] > 0 and m.pose.covariance[35] > 0 for m in odom), "odometry carries a pose covariance")
+
+edges = set()
+for _, m, _ in bag.read_messages(topics=["/tf"]):
+    for t in m.transforms:
+        edges.add((t.header.frame_id, t.child_frame_id))
+check(("map", "odom") in edges and ("odom", "imu") in edges, f"tf tree map -> odom -> imu ({sorted(edges)})")
+
+paths = [m for _, m, _ in bag.read_messages(topics=["/mmlio_node/path"])]
+check(len(paths) >= 5 and paths[-1].header.frame_id == "map", f"path published per keyframe in map ({len(paths)})")
+check(len(paths) > 0 and len(paths[-1].poses) >= 0.9 * len(odom), "the last path holds every pose")
+maps = [m for _, m, _ in bag.read_messages(topics=["/mmlio_node/map"])]
+check(len(maps) >= 3 and maps[-1].width > 10000 and maps[-1].header.frame_id == "map",
+      f"map refreshed ({len(maps)} clouds, last {maps[-1].width if maps else 0} points)")
+
+node_odo = read_tum(f"{work}/node/trajectory_odometry.tum")
+run_odo = read_tum(f"{work}/run/trajectory_odometry.tum")
+check(node_odo == run_odo, f"node odometry == mmlio run odometry ({len(node_odo)} vs {len(run_odo)} poses)")
+report = json.load(open(f"{work}/node/report.json"))
+loops = report["mapping"].get("loops", [])
+run_loops = json.load(open(f"{work}/run/report.json"))["mapping"].get("loops", [])
+check(len(loops) >= 1 and len(loops) == len(run_loops), f"the node closed loops live ({len(loops)}; mmlio run {len(run_loops)})")
+check(node_ate <= 1.05 * run_ate + 1e-4, f"node ATE {100 * node_ate:.2f} cm within 5 % of mmlio run's {100 * run_ate:.2f} cm")
+check(report["input"]["queue_dropped"]["imu"] == 0 and report["input"]["queue_dropped"]["scans"] == 0, "no message dropped")
+sys.exit(1 if errors else 0)
+PY
+echo "PASS"
