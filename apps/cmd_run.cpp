@@ -59,7 +59,7 @@ void run(const RunArgs& a) {
   } else {
     cfg = io::loadRigConfig(a.config);
   }
-  if (a.no_loop) cfg.loop.enabled = false;
+  if (a.no_loop) cfg.mapping.loop_enabled = false;
   applyCalibrationSource(cfg, a.calib, a.bag, a.out);
 
   pipeline::RunOptions options;

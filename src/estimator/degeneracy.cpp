@@ -64,8 +64,8 @@ Degeneracy analyseDegeneracy(const Matrix6d& information, const DegeneracyConfig
   d.translation_points = std::max(0.0, t.eigenvalues()(0));
   d.rotation_points = std::max(0.0, r.eigenvalues()(0));
   d.weak_translation = t.eigenvectors().col(0);
-  d.translation_degenerate = d.translation_points < cfg.min_translation_points;
-  d.rotation_degenerate = d.rotation_points < cfg.min_rotation_points;
+  d.translation_degenerate = d.translation_points < cfg.min_points;
+  d.rotation_degenerate = d.rotation_points < cfg.min_points;
   return d;
 }
 
@@ -74,7 +74,7 @@ int remapDegenerateDirections(const Degeneracy& d, const DegeneracyConfig& cfg, 
                               Eigen::Vector3d* p, Eigen::Quaterniond* q, Eigen::Vector3d* v) {
   int remapped = 0;
   for (int i = 0; i < 3; ++i) {
-    if (d.translation_eigenvalues(i) >= cfg.min_translation_points) continue;
+    if (d.translation_eigenvalues(i) >= cfg.min_points) continue;
     const Eigen::Vector3d u = d.translation_basis.col(i);
     *p -= u * u.dot(*p - p_predicted);
     *v -= u * u.dot(*v - v_predicted);
@@ -84,7 +84,7 @@ int remapDegenerateDirections(const Degeneracy& d, const DegeneracyConfig& cfg, 
   Eigen::Vector3d dtheta = solved_rotation.angle() * solved_rotation.axis();
   bool rotated = false;
   for (int i = 0; i < 3; ++i) {
-    if (d.rotation_eigenvalues(i) >= cfg.min_rotation_points) continue;
+    if (d.rotation_eigenvalues(i) >= cfg.min_points) continue;
     const Eigen::Vector3d u = d.rotation_basis.col(i);
     dtheta -= u * u.dot(dtheta);
     rotated = true;

@@ -29,19 +29,21 @@ void bind(YamlBinder& b, LidarConfig& c) {
   b.field("enabled", c.enabled, "false: ignore this LiDAR in every mode");
 }
 
-void bind(YamlBinder& b, ImuConfig& c) {
-  b.field("topic", c.topic, "ROS topic of sensor_msgs/Imu");
-  b.field("acc_unit", c.acc_unit, "accelerometer unit: auto (detect from the standstill norm) | g | m/s2");
-  b.field("acc_noise_density", c.acc_noise_density, "accelerometer white noise, m/s^2/sqrt(Hz)");
-  b.field("gyro_noise_density", c.gyro_noise_density, "gyroscope white noise, rad/s/sqrt(Hz)");
-  b.field("acc_bias_random_walk", c.acc_bias_random_walk, "accelerometer bias random walk, m/s^3/sqrt(Hz)");
-  b.field("gyro_bias_random_walk", c.gyro_bias_random_walk, "gyroscope bias random walk, rad/s^2/sqrt(Hz)");
-  b.field("gravity_m_s2", c.gravity_m_s2, "local gravity magnitude, m/s^2");
-  b.field("init_duration_s", c.init_duration_s,
+// `imu:` holds how the IMU arrives (ImuConfig) and the estimator's model of it.
+void bindImu(YamlBinder& b, RigConfig& c) {
+  estimator::OdometryConfig& e = c.estimator;
+  b.field("topic", c.imu.topic, "ROS topic of sensor_msgs/Imu");
+  b.field("acc_unit", c.imu.acc_unit, "accelerometer unit: auto (detect from the standstill norm) | g | m/s2");
+  b.field("acc_noise_density", e.imu_noise.acc_noise_density, "accelerometer white noise, m/s^2/sqrt(Hz)");
+  b.field("gyro_noise_density", e.imu_noise.gyro_noise_density, "gyroscope white noise, rad/s/sqrt(Hz)");
+  b.field("acc_bias_random_walk", e.imu_noise.acc_bias_random_walk, "accelerometer bias random walk, m/s^3/sqrt(Hz)");
+  b.field("gyro_bias_random_walk", e.imu_noise.gyro_bias_random_walk, "gyroscope bias random walk, rad/s^2/sqrt(Hz)");
+  b.field("gravity_m_s2", e.gravity_m_s2, "local gravity magnitude, m/s^2");
+  b.field("init_duration_s", e.imu_init.duration_s,
           "standstill at the start used to estimate gravity direction and gyro bias, s");
 }
 
-void bind(YamlBinder& b, FeatureConfig& c) {
+void bind(YamlBinder& b, lidar::FeatureConfig& c) {
   b.field("neighbours", c.neighbours, "points on each side used for curvature / scatter");
   b.field("edge_threshold", c.edge_threshold, "curvature above which a point is an edge candidate");
   b.field("plane_threshold", c.plane_threshold, "curvature below which a point is a plane candidate");
@@ -49,23 +51,25 @@ void bind(YamlBinder& b, FeatureConfig& c) {
           "depth difference between neighbours that breaks continuity (occlusion edge), m");
 }
 
-void bind(YamlBinder& b, BadFrameConfig& c) {
+void bind(YamlBinder& b, lidar::BadFrameConfig& c) {
   b.field("enabled", c.enabled, "drop solid-state frames with too little structure");
-  b.field("criterion", c.criterion,
-          "information (a frame with too few edges, see below, is dropped only if its own map matches "
-          "also leave a translation direction with fewer than odometry.degenerate_min_points effective points) | "
-          "edges (paper: tau_e, the edge count alone)");
+  b.choice("criterion", c.by_information, {{true, "information"}, {false, "edges"}},
+           "information (a frame with too few edges, see below, is dropped only if its own map matches "
+           "also leave a translation direction with fewer than odometry.degenerate_min_points effective points) | "
+           "edges (paper: tau_e, the edge count alone)");
   b.field("min_edge_range_m", c.min_edge_range_m, "only edge points farther than this count, m");
   b.field("min_edge_points", c.min_edge_points, "tau_e: a frame with fewer counted edge points is bad");
 }
 
-void bind(YamlBinder& b, OdometryConfig& c) {
+void bindOdometry(YamlBinder& b, estimator::OdometryConfig& c) {
+  using estimator::SurfacePoints;
   b.field("edge_voxel_m", c.edge_voxel_m, "voxel size for downsampling edge features, m");
   b.field("plane_voxel_m", c.plane_voxel_m, "voxel size for downsampling plane features, m");
-  b.field("surface_points", c.surface_points,
-          "LiDARs whose every return (not only scan-line plane features) is matched point-to-plane, the map's "
-          "local plane fit deciding: solid_state | all | none");
-  b.field("degenerate_min_points", c.degenerate_min_points,
+  b.choice("surface_points", c.surface_points,
+           {{SurfacePoints::kSolidState, "solid_state"}, {SurfacePoints::kAll, "all"}, {SurfacePoints::kNone, "none"}},
+           "LiDARs whose every return (not only scan-line plane features) is matched point-to-plane, the map's "
+           "local plane fit deciding: solid_state | all | none");
+  b.field("degenerate_min_points", c.degeneracy.min_points,
           "a sweep is degenerate along a direction its map matches constrain less than this many perfectly "
           "aligned plane points would (translation; rotation per metre of lever arm)");
   b.field("remap_degenerate", c.remap_degenerate,
@@ -80,27 +84,28 @@ void bind(YamlBinder& b, OdometryConfig& c) {
   b.field("huber_loss_m", c.huber_loss_m, "Huber loss scale of point-to-edge / point-to-plane residuals, m");
 }
 
-void bind(YamlBinder& b, LoopConfig& c) {
-  b.field("enabled", c.enabled, "detect and close loops in the back end");
-  b.field("search_radius_m", c.search_radius_m, "loop candidates: past keyframes within this distance, m");
-  b.field("min_time_gap_s", c.min_time_gap_s, "loop candidates: at least this much older than the query, s");
-  b.field("max_fitness_m", c.max_fitness_m, "accept a loop when the mean ICP residual is below this, m");
-  b.field("min_overlap", c.min_overlap, "accept a loop when the inlier fraction is above this, 0..1");
+void bindLoop(YamlBinder& b, backend::MappingConfig& c) {
+  b.field("enabled", c.loop_enabled, "detect and close loops in the back end");
+  b.field("search_radius_m", c.loop.search_radius_m, "loop candidates: past keyframes within this distance, m");
+  b.field("min_time_gap_s", c.loop.min_time_gap_s, "loop candidates: at least this much older than the query, s");
+  b.field("max_fitness_m", c.loop.max_fitness_m, "accept a loop when the mean ICP residual is below this, m");
+  b.field("min_overlap", c.loop.min_overlap, "accept a loop when the inlier fraction is above this, 0..1");
 }
 
-void bind(YamlBinder& b, DynamicObjectsConfig& c) {
-  b.field("enabled", c.enabled,
+void bindDynamic(YamlBinder& b, RigConfig& c) {
+  b.field("enabled", c.estimator.dynamic.enabled,
           "returns in space an earlier sweep saw through (people, doors) are rejected before registration "
           "and kept out of the local map; local map points a keyframe sees through are removed");
-  b.field("clean_map", c.clean_map,
-          "remove from map.pcd the points keyframes saw through more often than they saw them (ghosts)");
+  b.field("clean_map", c.mapping.clean_map,
+          "remove from map.pcd the points keyframes saw through (at least twice, and by at least a third of "
+          "the keyframes that saw that spot): ghosts of what moved");
 }
 
-void bind(YamlBinder& b, OutputConfig& c) {
-  b.field("map_voxel_m", c.map_voxel_m, "voxel size of the written map.pcd, m; 0 keeps every point");
-  b.field("per_lidar_maps", c.per_lidar_maps, "also write one map_<lidar>.pcd per LiDAR");
-  b.field("write_kitti", c.write_kitti, "also write the trajectory in KITTI format (poses + times.txt)");
-  b.field("dynamic_map", c.dynamic_map, "also write map_dynamic.pcd: the points removed as moving objects");
+void bindOutput(YamlBinder& b, RigConfig& c) {
+  b.field("map_voxel_m", c.mapping.map_leaf_m, "voxel size of the written map.pcd, m; 0 keeps every point");
+  b.field("per_lidar_maps", c.mapping.per_lidar_maps, "also write one map_<lidar>.pcd per LiDAR");
+  b.field("write_kitti", c.output.write_kitti, "also write the trajectory in KITTI format (poses + times.txt)");
+  b.field("dynamic_map", c.mapping.dynamic_map, "also write map_dynamic.pcd: the points removed as moving objects");
 }
 
 void bind(YamlBinder& b, RigConfig& c) {
@@ -110,17 +115,16 @@ void bind(YamlBinder& b, RigConfig& c) {
           "| path to a calibration YAML from `mmlio calibrate` (relative to this file)");
   b.field("reference_lidar", c.reference_lidar,
           "LiDAR whose sweeps define the fusion window (falls back to the first active one)");
-  b.section("imu", c.imu, [](YamlBinder& s, ImuConfig& v) { bind(s, v); }, "IMU");
+  b.section("imu", c, bindImu, "IMU");
   b.list("lidars", c.lidars, [](YamlBinder& s, LidarConfig& v) { bind(s, v); }, "LiDARs of the rig");
-  b.section("features", c.features, [](YamlBinder& s, FeatureConfig& v) { bind(s, v); }, "feature extraction");
-  b.section("bad_frame", c.bad_frame, [](YamlBinder& s, BadFrameConfig& v) { bind(s, v); },
+  b.section("features", c.estimator.features, [](YamlBinder& s, lidar::FeatureConfig& v) { bind(s, v); },
+            "feature extraction");
+  b.section("bad_frame", c.estimator.bad_frame, [](YamlBinder& s, lidar::BadFrameConfig& v) { bind(s, v); },
             "bad-frame check for solid-state LiDARs");
-  b.section("odometry", c.odometry, [](YamlBinder& s, OdometryConfig& v) { bind(s, v); },
-            "sliding-window odometry");
-  b.section("loop", c.loop, [](YamlBinder& s, LoopConfig& v) { bind(s, v); }, "loop closure");
-  b.section("dynamic", c.dynamic, [](YamlBinder& s, DynamicObjectsConfig& v) { bind(s, v); },
-            "moving objects (people): rejection in the odometry, ghost removal in the map");
-  b.section("output", c.output, [](YamlBinder& s, OutputConfig& v) { bind(s, v); }, "outputs");
+  b.section("odometry", c.estimator, bindOdometry, "sliding-window odometry");
+  b.section("loop", c.mapping, bindLoop, "loop closure");
+  b.section("dynamic", c, bindDynamic, "moving objects (people): rejection in the odometry, ghost removal in the map");
+  b.section("output", c, bindOutput, "outputs");
 }
 
 const char* const kLidarTypes[] = {"velodyne", "ouster", "hesai", "generic_spinning", "livox"};
@@ -233,15 +237,16 @@ void validateRigConfig(const RigConfig& cfg) {
   check.require(!cfg.calibration.empty(), "calibration", "must be config, auto or a file path");
 
   const ImuConfig& imu = cfg.imu;
+  const estimator::OdometryConfig& e = cfg.estimator;
   check.require(!imu.topic.empty(), "imu.topic", "must not be empty");
   check.require(imu.acc_unit == "auto" || imu.acc_unit == "g" || imu.acc_unit == "m/s2", "imu.acc_unit",
                 "must be auto, g or m/s2, got '" + imu.acc_unit + "'");
-  check.positive(imu.acc_noise_density, "imu.acc_noise_density");
-  check.positive(imu.gyro_noise_density, "imu.gyro_noise_density");
-  check.positive(imu.acc_bias_random_walk, "imu.acc_bias_random_walk");
-  check.positive(imu.gyro_bias_random_walk, "imu.gyro_bias_random_walk");
-  check.positive(imu.gravity_m_s2, "imu.gravity_m_s2");
-  check.positive(imu.init_duration_s, "imu.init_duration_s");
+  check.positive(e.imu_noise.acc_noise_density, "imu.acc_noise_density");
+  check.positive(e.imu_noise.gyro_noise_density, "imu.gyro_noise_density");
+  check.positive(e.imu_noise.acc_bias_random_walk, "imu.acc_bias_random_walk");
+  check.positive(e.imu_noise.gyro_bias_random_walk, "imu.gyro_bias_random_walk");
+  check.positive(e.gravity_m_s2, "imu.gravity_m_s2");
+  check.positive(e.imu_init.duration_s, "imu.init_duration_s");
 
   check.require(!cfg.lidars.empty(), "lidars", "at least one LiDAR is needed");
   std::vector<std::string> names;
@@ -266,39 +271,35 @@ void validateRigConfig(const RigConfig& cfg) {
   check.require(reference_known, "reference_lidar", "'" + cfg.reference_lidar + "' is not one of the lidars (" + join(names) + ")");
   check.require(!activeLidars(cfg, cfg.mode).empty(), "mode", "'" + cfg.mode + "' uses no enabled LiDAR of this rig (vi needs a spinning one, hi a livox)");
 
-  check.positive(cfg.features.neighbours, "features.neighbours");
-  check.nonNegative(cfg.features.edge_threshold, "features.edge_threshold");
-  check.nonNegative(cfg.features.plane_threshold, "features.plane_threshold");
-  check.require(cfg.features.plane_threshold <= cfg.features.edge_threshold, "features.plane_threshold",
-                "must be <= features.edge_threshold");
-  check.positive(cfg.features.continuity_jump_m, "features.continuity_jump_m");
+  const lidar::FeatureConfig& f = e.features;
+  check.positive(f.neighbours, "features.neighbours");
+  check.nonNegative(f.edge_threshold, "features.edge_threshold");
+  check.nonNegative(f.plane_threshold, "features.plane_threshold");
+  check.require(f.plane_threshold <= f.edge_threshold, "features.plane_threshold", "must be <= features.edge_threshold");
+  check.positive(f.continuity_jump_m, "features.continuity_jump_m");
 
-  check.require(cfg.bad_frame.criterion == "information" || cfg.bad_frame.criterion == "edges", "bad_frame.criterion",
-                "must be information or edges, got '" + cfg.bad_frame.criterion + "'");
-  check.nonNegative(cfg.bad_frame.min_edge_range_m, "bad_frame.min_edge_range_m");
-  check.nonNegative(cfg.bad_frame.min_edge_points, "bad_frame.min_edge_points");
+  check.nonNegative(e.bad_frame.min_edge_range_m, "bad_frame.min_edge_range_m");
+  check.nonNegative(e.bad_frame.min_edge_points, "bad_frame.min_edge_points");
 
-  const OdometryConfig& o = cfg.odometry;
-  check.positive(o.edge_voxel_m, "odometry.edge_voxel_m");
-  check.positive(o.plane_voxel_m, "odometry.plane_voxel_m");
-  check.nonNegative(o.degenerate_min_points, "odometry.degenerate_min_points");
-  check.require(o.surface_points == "solid_state" || o.surface_points == "all" || o.surface_points == "none",
-                "odometry.surface_points", "must be solid_state, all or none, got '" + o.surface_points + "'");
-  check.positive(o.map_voxel_m, "odometry.map_voxel_m");
-  check.positive(o.local_map_radius_m, "odometry.local_map_radius_m");
-  check.positive(o.window_size, "odometry.window_size");
-  check.nonNegative(o.keyframe_rotation_deg, "odometry.keyframe_rotation_deg");
-  check.nonNegative(o.keyframe_translation_m, "odometry.keyframe_translation_m");
-  check.nonNegative(o.keyframe_interval_s, "odometry.keyframe_interval_s");
-  check.positive(o.max_iterations, "odometry.max_iterations");
-  check.positive(o.huber_loss_m, "odometry.huber_loss_m");
+  check.positive(e.edge_voxel_m, "odometry.edge_voxel_m");
+  check.positive(e.plane_voxel_m, "odometry.plane_voxel_m");
+  check.nonNegative(e.degeneracy.min_points, "odometry.degenerate_min_points");
+  check.positive(e.map_voxel_m, "odometry.map_voxel_m");
+  check.positive(e.local_map_radius_m, "odometry.local_map_radius_m");
+  check.positive(e.window_size, "odometry.window_size");
+  check.nonNegative(e.keyframe_rotation_deg, "odometry.keyframe_rotation_deg");
+  check.nonNegative(e.keyframe_translation_m, "odometry.keyframe_translation_m");
+  check.nonNegative(e.keyframe_interval_s, "odometry.keyframe_interval_s");
+  check.positive(e.max_iterations, "odometry.max_iterations");
+  check.positive(e.huber_loss_m, "odometry.huber_loss_m");
 
-  check.positive(cfg.loop.search_radius_m, "loop.search_radius_m");
-  check.nonNegative(cfg.loop.min_time_gap_s, "loop.min_time_gap_s");
-  check.positive(cfg.loop.max_fitness_m, "loop.max_fitness_m");
-  check.require(cfg.loop.min_overlap >= 0 && cfg.loop.min_overlap <= 1, "loop.min_overlap", "must be within 0..1");
+  const backend::LoopCloser::Config& loop = cfg.mapping.loop;
+  check.positive(loop.search_radius_m, "loop.search_radius_m");
+  check.nonNegative(loop.min_time_gap_s, "loop.min_time_gap_s");
+  check.positive(loop.max_fitness_m, "loop.max_fitness_m");
+  check.require(loop.min_overlap >= 0 && loop.min_overlap <= 1, "loop.min_overlap", "must be within 0..1");
 
-  check.nonNegative(cfg.output.map_voxel_m, "output.map_voxel_m");
+  check.nonNegative(cfg.mapping.map_leaf_m, "output.map_voxel_m");
 }
 
 // ---- emitting --------------------------------------------------------------------------------

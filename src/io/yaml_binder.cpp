@@ -169,6 +169,10 @@ YAML::Node YamlBinder::lookup(const std::string& key) {
   return YAML::Node(YAML::NodeType::Undefined);
 }
 
+void YamlBinder::throwChoice(const std::string& where, const std::string& valid, const std::string& got) {
+  throw Error(where + ": must be one of " + valid + ", got '" + got + "'");
+}
+
 std::string YamlBinder::where(const std::string& key, const YAML::Node& node) const {
   return yamlLocation(file_, node) + ": " + path(key);
 }

@@ -20,7 +20,7 @@ lidar::SweepAligner::Config alignerConfig(const io::RigConfig& cfg, const std::s
 
 OnlinePipeline::OnlinePipeline(const io::RigConfig& cfg, const std::string& mode, SweepCallback on_sweep)
     : aligner_(alignerConfig(cfg, mode)),
-      odometry_(odometryConfig(cfg), lidarSetups(cfg, mode)),
+      odometry_(cfg.estimator, lidarSetups(cfg, mode)),
       on_sweep_(std::move(on_sweep)) {
   for (const auto& s : lidarSetups(cfg, mode)) offset_s_[s.extrinsic.name] = s.extrinsic.time_offset_s;
 }

@@ -14,11 +14,11 @@ System::System(const io::RigConfig& cfg, const std::string& mode, SweepObserver 
     : cfg_(cfg),
       mode_(mode.empty() ? cfg.mode : mode),
       observer_(std::move(observer)),
-      mapping_(mappingBackendConfig(cfg)),
-      degeneracy_(cfg.odometry.degenerate_min_points, cfg.odometry.remap_degenerate),
+      mapping_(cfg.mapping),
+      degeneracy_(cfg.estimator.degeneracy.min_points, cfg.estimator.remap_degenerate),
       online_(cfg, mode_, [this](const estimator::SweepResult& r) { onSweep(r); }) {
-  dynamic_.enabled = cfg.dynamic.enabled;
-  dynamic_.clean_map = cfg.dynamic.clean_map;
+  dynamic_.enabled = cfg.estimator.dynamic.enabled;
+  dynamic_.clean_map = cfg.mapping.clean_map;
 }
 
 void System::onSweep(const estimator::SweepResult& r) {
@@ -117,7 +117,7 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
   mapping_.read([&](const MappingBackend& b) {
     trajectory = b.correctedTrajectory();
     map_points = b.map();
-    if (cfg_.output.dynamic_map) dynamic_map = b.dynamicMap();
+    if (cfg_.mapping.dynamic_map) dynamic_map = b.dynamicMap();
     for (const std::string& lidar : b.lidarNames()) lidar_maps[lidar] = b.lidarMap(lidar);
     return 0;
   });
@@ -136,13 +136,13 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
   out.poses = trajectory.size();
   out.map = dir + "map.pcd";
   out.map_points = map_points.size();
-  out.map_voxel_m = cfg_.output.map_voxel_m;
+  out.map_voxel_m = cfg_.mapping.map_leaf_m;
   for (const auto& [lidar, points] : lidar_maps) {
     const std::string path = dir + "map_" + lidar + ".pcd";
     io::writePcdBinary(path, points);
     out.per_lidar_maps[lidar] = path;
   }
-  if (cfg_.output.dynamic_map) {
+  if (cfg_.mapping.dynamic_map) {
     io::writePcdBinary(dir + "map_dynamic.pcd", dynamic_map);
     out.dynamic_map = dir + "map_dynamic.pcd";
   }

@@ -138,9 +138,9 @@ TEST(Defaults, DefaultConfigYamlLoadsBackToTheDefaults) {
   const std::string text = defaultConfigYaml();
   const RigConfig cfg = parseRigConfig(text, "defaults");
   EXPECT_EQ(toYaml(cfg), toYaml(RigConfig{}));
-  EXPECT_EQ(cfg.odometry.window_size, 4);
-  EXPECT_EQ(cfg.bad_frame.min_edge_points, 100);
-  EXPECT_EQ(cfg.imu.gyro_bias_random_walk, 0.0001);
+  EXPECT_EQ(cfg.estimator.window_size, 4);
+  EXPECT_EQ(cfg.estimator.bad_frame.min_edge_points, 100);
+  EXPECT_EQ(cfg.estimator.imu_noise.gyro_bias_random_walk, 0.0001);
   EXPECT_EQ(cfg.lidars[0].T_imu_sensor.translation(), Eigen::Vector3d(0, 0, 0.2));
 }
 
@@ -151,7 +151,7 @@ TEST(Defaults, CommentsCarryEachDefault) {
   EXPECT_NE(text.find("(default: identity)"), std::string::npos);
   // A changed value keeps showing the default in the comment.
   RigConfig cfg;
-  cfg.loop.search_radius_m = 25;
+  cfg.mapping.loop.search_radius_m = 25;
   EXPECT_NE(toYaml(cfg).find("(default: 10.0)\n  search_radius_m: 25.0\n"), std::string::npos);
 }
 
@@ -162,11 +162,34 @@ TEST(Defaults, EmptyFileGivesTheDefaultRig) {
 
 TEST(Loading, AbsentKeysKeepDefaultsAndGivenOnesOverride) {
   const RigConfig cfg = parseRigConfig("odometry: {window_size: 7}\nloop:\n  enabled: false\n", "partial.yaml");
-  EXPECT_EQ(cfg.odometry.window_size, 7);
-  EXPECT_EQ(cfg.odometry.edge_voxel_m, 0.2);
-  EXPECT_FALSE(cfg.loop.enabled);
-  EXPECT_EQ(cfg.loop.search_radius_m, 10.0);
+  EXPECT_EQ(cfg.estimator.window_size, 7);
+  EXPECT_EQ(cfg.estimator.edge_voxel_m, 0.2);
+  EXPECT_FALSE(cfg.mapping.loop_enabled);
+  EXPECT_EQ(cfg.mapping.loop.search_radius_m, 10.0);
   EXPECT_EQ(cfg.lidars.size(), 2u);
+}
+
+TEST(Loading, SectionsBindTheStagesOwnSettings) {
+  const RigConfig cfg = parseRigConfig(
+      "imu: {gyro_noise_density: 0.004, init_duration_s: 2.0}\n"
+      "odometry: {surface_points: all, degenerate_min_points: 12}\n"
+      "bad_frame: {criterion: edges}\n"
+      "dynamic: {enabled: false, clean_map: false}\n"
+      "output: {map_voxel_m: 0.1, dynamic_map: false}\n",
+      "stages.yaml");
+  EXPECT_EQ(cfg.estimator.imu_noise.gyro_noise_density, 0.004);
+  EXPECT_EQ(cfg.estimator.imu_init.duration_s, 2.0);
+  EXPECT_EQ(cfg.estimator.surface_points, estimator::SurfacePoints::kAll);
+  EXPECT_EQ(cfg.estimator.degeneracy.min_points, 12.0);
+  EXPECT_FALSE(cfg.estimator.bad_frame.by_information);
+  EXPECT_FALSE(cfg.estimator.dynamic.enabled);
+  EXPECT_FALSE(cfg.mapping.clean_map);
+  EXPECT_EQ(cfg.mapping.map_leaf_m, 0.1);
+  EXPECT_FALSE(cfg.mapping.dynamic_map);
+  // Written back, the named values keep their names.
+  const std::string yaml = toYaml(cfg);
+  EXPECT_NE(yaml.find("surface_points: all\n"), std::string::npos);
+  EXPECT_NE(yaml.find("criterion: edges\n"), std::string::npos);
 }
 
 TEST(Loading, ListReplacesTheDefaultLidars) {
@@ -241,6 +264,10 @@ TEST(Validation, BadValuesAreErrorsNamingTheKey) {
   EXPECT_ERROR_CONTAINS(parseRigConfig("odometry: {edge_voxel_m: -0.1}\n", "r.yaml"),
                         "odometry.edge_voxel_m: must be a finite number > 0, got -0.1");
   EXPECT_ERROR_CONTAINS(parseRigConfig("loop: {min_overlap: 1.5}\n", "r.yaml"), "loop.min_overlap");
+  EXPECT_ERROR_CONTAINS(parseRigConfig("\nbad_frame: {criterion: corners}\n", "r.yaml"),
+                        "r.yaml:2: bad_frame.criterion: must be one of information, edges, got 'corners'");
+  EXPECT_ERROR_CONTAINS(parseRigConfig("odometry:\n  surface_points: some\n", "r.yaml"),
+                        "r.yaml:2: odometry.surface_points: must be one of solid_state, all, none, got 'some'");
   EXPECT_ERROR_CONTAINS(parseRigConfig("reference_lidar: ouster\n", "r.yaml"),
                         "reference_lidar: 'ouster' is not one of the lidars (velodyne, livox)");
   EXPECT_ERROR_CONTAINS(

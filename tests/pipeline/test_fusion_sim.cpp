@@ -14,14 +14,14 @@ struct CorridorRun {
   std::size_t degenerate = 0, registered = 0;
 };
 
-CorridorRun runCorridor(const std::string& mode, const std::string& surface_points, sim::SolidStatePattern pattern) {
+CorridorRun runCorridor(const std::string& mode, estimator::SurfacePoints surface_points, sim::SolidStatePattern pattern) {
   sim::SimOptions so;
   so.scenario = "corridor";
   so.duration_s = 20.0;
   so.livox_pattern = pattern;
   const sim::Simulator sim(so);
   io::RigConfig cfg = testing::simRigConfig(sim);
-  cfg.odometry.surface_points = surface_points;
+  cfg.estimator.surface_points = surface_points;
   Trajectory trajectory;
   CorridorRun run;
   pipeline::OnlinePipeline online(cfg, mode, [&](const estimator::SweepResult& r) {
@@ -36,8 +36,8 @@ CorridorRun runCorridor(const std::string& mode, const std::string& surface_poin
 }
 
 TEST(FusionOnSimulation, EverySolidStateReturnReachesTheEstimatorAndHoldsTheCorridorAxis) {
-  const CorridorRun lines = runCorridor("hi", "none", sim::SolidStatePattern::kLissajous);
-  const CorridorRun surface = runCorridor("hi", "solid_state", sim::SolidStatePattern::kLissajous);
+  const CorridorRun lines = runCorridor("hi", estimator::SurfacePoints::kNone, sim::SolidStatePattern::kLissajous);
+  const CorridorRun surface = runCorridor("hi", estimator::SurfacePoints::kSolidState, sim::SolidStatePattern::kLissajous);
   std::printf("HI corridor 20 s: scan-line planes ATE %.3f m; every return ATE %.3f m, %zu/%zu sweeps degenerate\n",
               lines.eval.ate_rmse_m, surface.eval.ate_rmse_m, surface.degenerate, surface.registered);
   EXPECT_LT(surface.eval.ate_rmse_m, 0.10);
@@ -45,9 +45,9 @@ TEST(FusionOnSimulation, EverySolidStateReturnReachesTheEstimatorAndHoldsTheCorr
 }
 
 TEST(FusionOnSimulation, HviBeatsVelodyneAloneWithEitherSolidStatePattern) {
-  const CorridorRun vi = runCorridor("vi", "solid_state", sim::SolidStatePattern::kLissajous);
+  const CorridorRun vi = runCorridor("vi", estimator::SurfacePoints::kSolidState, sim::SolidStatePattern::kLissajous);
   for (const auto pattern : {sim::SolidStatePattern::kLissajous, sim::SolidStatePattern::kRosette}) {
-    const CorridorRun hvi = runCorridor("hvi", "solid_state", pattern);
+    const CorridorRun hvi = runCorridor("hvi", estimator::SurfacePoints::kSolidState, pattern);
     std::printf("corridor 20 s: HVI ATE %.4f m (%s), VI %.4f m\n", hvi.eval.ate_rmse_m,
                 pattern == sim::SolidStatePattern::kRosette ? "rosette" : "lissajous", vi.eval.ate_rmse_m);
     EXPECT_LT(hvi.eval.ate_rmse_m, 0.025);

@@ -30,10 +30,10 @@ PeopleRun runCorridor(int people, bool handle_dynamic, double duration_s = 25.0)
   so.seed = 4;
   const sim::Simulator sim(so);
   io::RigConfig cfg = testing::simRigConfig(sim);
-  cfg.dynamic.enabled = handle_dynamic;
-  cfg.dynamic.clean_map = handle_dynamic;
-  cfg.loop.enabled = false;
-  pipeline::MappingBackend mapping(pipeline::mappingBackendConfig(cfg));
+  cfg.estimator.dynamic.enabled = handle_dynamic;
+  cfg.mapping.clean_map = handle_dynamic;
+  cfg.mapping.loop_enabled = false;
+  pipeline::MappingBackend mapping(cfg.mapping);
   Trajectory trajectory;
   PeopleRun run;
   pipeline::OnlinePipeline online(cfg, "hvi", [&](const estimator::SweepResult& r) {

@@ -30,8 +30,9 @@ Matrix6d matchInformation(const std::vector<MapMatch>& matches, const Eigen::Iso
                           double inlier_m, int source = -1);
 
 struct DegeneracyConfig {
-  double min_translation_points = 30.0;  // weakest translation direction worth fewer points: degenerate
-  double min_rotation_points = 30.0;     // the same for rotation (per metre of lever arm)
+  // A translation direction, or a rotation axis (per metre of lever arm), worth fewer effective
+  // points than this is degenerate.
+  double min_points = 30.0;
 };
 
 struct Degeneracy {

@@ -14,7 +14,7 @@
 //
 // Supported field types: bool, int, double, std::string, std::vector<double>, Eigen::Isometry3d
 // (a flow sequence of 16 numbers, 4x4 row-major, validated as a rigid transform). Nested structs
-// go through section(), lists of structs through list().
+// go through section(), lists of structs through list(), enums (named values) through choice().
 
 #include <yaml-cpp/yaml.h>
 
@@ -23,6 +23,7 @@
 #include <ostream>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace mmlio::io {
@@ -79,6 +80,33 @@ class YamlBinder {
         emitKey(key, withDefault(key, doc), " " + encodeYaml(value, keyColumn() + static_cast<int>(key.size()) + 3));
         break;
     }
+    return *this;
+  }
+
+  /// A value spelled in YAML as one of `spellings` ({value, name}), e.g. an enum; reading any
+  /// other name is an error listing the valid ones.
+  template <typename E>
+  YamlBinder& choice(const std::string& key, E& value, const std::vector<std::pair<E, std::string>>& spellings,
+                     const std::string& doc) {
+    if (mode_ != Mode::kRead) {
+      std::string text;
+      for (const auto& [v, name] : spellings)
+        if (v == value) text = name;
+      return field(key, text, doc);
+    }
+    const YAML::Node child = lookup(key);
+    if (!child) return *this;
+    std::string text;
+    decodeYaml(child, where(key, child), text);
+    std::string valid;
+    for (const auto& [v, name] : spellings) {
+      if (name == text) {
+        value = v;
+        return *this;
+      }
+      valid += (valid.empty() ? "" : ", ") + name;
+    }
+    throwChoice(where(key, child), valid, text);
     return *this;
   }
 
@@ -164,6 +192,7 @@ class YamlBinder {
   static std::string defaultText(const Eigen::Isometry3d& value);
 
   YAML::Node lookup(const std::string& key);
+  [[noreturn]] static void throwChoice(const std::string& where, const std::string& valid, const std::string& got);
   std::string where(const std::string& key, const YAML::Node& node) const;
   [[noreturn]] void throwNotA(const std::string& what, const std::string& key, const YAML::Node& node) const;
   std::string withDefault(const std::string& key, const std::string& doc) const;
