@@ -38,8 +38,8 @@ void BM_PointToPlaneIcpRoom(benchmark::State& state) {
   const auto scene = testing::roomA();
   const Eigen::Isometry3d T_world_a = pose(-1.0, 0.5, 1.0, 0.2);
   const auto a = testing::scan(scene, T_world_a, 1);
-  const auto b = voxelCentroids(testing::scan(scene, T_world_a * pose(0.6, -0.4, 0.05, 0.1), 2), 0.1);
-  const IcpTarget target(voxelCentroids(a, 0.1));
+  const auto b = map::voxelCentroids(testing::scan(scene, T_world_a * pose(0.6, -0.4, 0.05, 0.1), 2), 0.1);
+  const IcpTarget target(map::voxelCentroids(a, 0.1));
   for (auto _ : state) benchmark::DoNotOptimize(alignPointToPlane(b, target, Eigen::Isometry3d::Identity()));
   state.counters["source_points"] = static_cast<double>(b.size());
 }
@@ -52,10 +52,10 @@ void BM_LoopCloserTrueRevisit(benchmark::State& state) {
   PoseGraph graph;
   KeyframeNode k0, k1;
   k0.T_world_body_odom = T0;
-  k0.cloud_body = voxelCentroids(testing::scan(scene, T0, 10), 0.1);
+  k0.cloud_body = map::voxelCentroids(testing::scan(scene, T0, 10), 0.1);
   k1.stamp_ns = fromSec(30.0);
   k1.T_world_body_odom = T1 * pose(0.4, 0.3, 0.02, 0.05);
-  k1.cloud_body = voxelCentroids(testing::scan(scene, T1, 11), 0.1);
+  k1.cloud_body = map::voxelCentroids(testing::scan(scene, T1, 11), 0.1);
   graph.addKeyframe(k0);
   const int q = graph.addKeyframe(k1);
   const LoopCloser closer{LoopCloser::Config{}};

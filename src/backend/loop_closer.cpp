@@ -71,7 +71,7 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
     const Eigen::Isometry3d T_match_i = T_match_world * graph.pose(i);
     for (const auto& p : graph.node(i).cloud_body) submap.push_back(T_match_i * p);
   }
-  const IcpTarget target(voxelCentroids(submap, cfg_.submap_voxel_m));
+  const IcpTarget target(map::voxelCentroids(submap, cfg_.submap_voxel_m));
   const auto& source = graph.node(query).cloud_body;
 
   v.icp = alignPointToPlane(source, target, prior, icp_);
@@ -109,7 +109,7 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
   restart.voxel_fine_m = std::max(icp_.voxel_fine_m, 0.3);
   restart.max_corr_fine_m = std::max(icp_.max_corr_fine_m, 0.5);
   restart.max_iterations_per_level = 10;
-  const auto axes = horizontalAxes(voxelCentroids(source, 0.5), r.T_target_source);
+  const auto axes = horizontalAxes(map::voxelCentroids(source, 0.5), r.T_target_source);
   for (const auto& axis : axes)
     for (double shift : cfg_.ambiguity_shifts_m)
       for (double sign : {-1.0, 1.0}) {

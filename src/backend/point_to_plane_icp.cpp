@@ -2,33 +2,16 @@
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
-#include <nanoflann.hpp>
 #include <unordered_map>
 
 #include "mmlio/core/so3.hpp"
+#include "mmlio/map/kd_tree.hpp"
 
 namespace mmlio::backend {
 namespace {
 
-struct CloudAdaptor {
-  const std::vector<Eigen::Vector3d>* pts;
-  std::size_t kdtree_get_point_count() const { return pts->size(); }
-  double kdtree_get_pt(std::size_t i, std::size_t d) const { return (*pts)[i][static_cast<int>(d)]; }
-  template <class BBox>
-  bool kdtree_get_bbox(BBox&) const { return false; }
-};
-using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, CloudAdaptor>,
-                                                   CloudAdaptor, 3, std::uint32_t>;
-
-struct VoxelKey {
-  std::int64_t x, y, z;
-  bool operator==(const VoxelKey& o) const { return x == o.x && y == o.y && z == o.z; }
-};
-struct VoxelKeyHash {
-  std::size_t operator()(const VoxelKey& k) const {
-    return static_cast<std::size_t>((k.x * 73856093) ^ (k.y * 19349669) ^ (k.z * 83492791));
-  }
-};
+using map::CloudAdaptor;
+using KdTree = map::KdTree3d;
 
 double geometric(double a, double b, int level, int levels) {
   if (levels <= 1) return b;
@@ -36,29 +19,6 @@ double geometric(double a, double b, int level, int levels) {
 }
 
 }  // namespace
-
-std::vector<Eigen::Vector3d> voxelCentroids(const std::vector<Eigen::Vector3d>& pts, double leaf_m) {
-  if (leaf_m <= 0) return pts;
-  const double inv = 1.0 / leaf_m;
-  std::unordered_map<VoxelKey, std::size_t, VoxelKeyHash> index;
-  index.reserve(pts.size());
-  std::vector<Eigen::Vector3d> sum;
-  std::vector<int> count;
-  for (const auto& p : pts) {
-    const VoxelKey k{static_cast<std::int64_t>(std::floor(p.x() * inv)), static_cast<std::int64_t>(std::floor(p.y() * inv)),
-                     static_cast<std::int64_t>(std::floor(p.z() * inv))};
-    auto [it, inserted] = index.emplace(k, sum.size());
-    if (inserted) {
-      sum.push_back(p);
-      count.push_back(1);
-    } else {
-      sum[it->second] += p;
-      ++count[it->second];
-    }
-  }
-  for (std::size_t i = 0; i < sum.size(); ++i) sum[i] /= count[i];
-  return sum;
-}
 
 struct IcpTarget::Impl {
   std::vector<Eigen::Vector3d> points;
@@ -72,7 +32,7 @@ IcpTarget::IcpTarget(std::vector<Eigen::Vector3d> points, int normal_neighbours,
   Impl& m = *impl_;
   m.points = std::move(points);
   m.adaptor.pts = &m.points;
-  m.tree = std::make_unique<KdTree>(3, m.adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+  m.tree = std::make_unique<KdTree>(3, m.adaptor, map::kdTreeParams());
   m.normals.assign(m.points.size(), Eigen::Vector3d::UnitZ());
   m.has_normal.assign(m.points.size(), 0);
   const std::size_t k = static_cast<std::size_t>(std::max(3, normal_neighbours));
@@ -138,7 +98,7 @@ IcpResult alignPointToPlane(const std::vector<Eigen::Vector3d>& source, const Ic
   double abs_sum = 0;
   for (int level = 0; level < levels; ++level) {
     const double gate = geometric(cfg.max_corr_coarse_m, cfg.max_corr_fine_m, level, levels);
-    src = voxelCentroids(source, geometric(cfg.voxel_coarse_m, cfg.voxel_fine_m, level, levels));
+    src = map::voxelCentroids(source, geometric(cfg.voxel_coarse_m, cfg.voxel_fine_m, level, levels));
     const double gate_sq = gate * gate;
     for (int it = 0; it < cfg.max_iterations_per_level; ++it) {
       H.setZero();

@@ -7,10 +7,10 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
-#include <nanoflann.hpp>
 #include <unordered_map>
 
 #include "mmlio/core/so3.hpp"
+#include "mmlio/map/kd_tree.hpp"
 
 namespace mmlio::calib {
 namespace {
@@ -18,25 +18,8 @@ namespace {
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
-struct CloudAdaptor {
-  const std::vector<Eigen::Vector3d>* pts;
-  std::size_t kdtree_get_point_count() const { return pts->size(); }
-  double kdtree_get_pt(std::size_t i, std::size_t d) const { return (*pts)[i][static_cast<int>(d)]; }
-  template <class BBox>
-  bool kdtree_get_bbox(BBox&) const { return false; }
-};
-using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, CloudAdaptor>, CloudAdaptor, 3,
-                                                   std::uint32_t>;
-
-struct VoxelKey {
-  std::int64_t x, y, z;
-  bool operator==(const VoxelKey& o) const { return x == o.x && y == o.y && z == o.z; }
-};
-struct VoxelKeyHash {
-  std::size_t operator()(const VoxelKey& k) const {
-    return static_cast<std::size_t>((k.x * 73856093) ^ (k.y * 19349669) ^ (k.z * 83492791));
-  }
-};
+using map::CloudAdaptor;
+using KdTree = map::KdTree3d;
 
 double geometric(double a, double b, int level, int levels) {
   if (levels <= 1) return b;
@@ -72,32 +55,9 @@ std::vector<Eigen::Matrix3d> covariancesWithTree(const std::vector<Eigen::Vector
 
 }  // namespace
 
-std::vector<Eigen::Vector3d> voxelCentroids(const std::vector<Eigen::Vector3d>& pts, double leaf_m) {
-  if (leaf_m <= 0) return pts;
-  const double inv = 1.0 / leaf_m;
-  std::unordered_map<VoxelKey, std::size_t, VoxelKeyHash> index;
-  index.reserve(pts.size());
-  std::vector<Eigen::Vector3d> sum;
-  std::vector<int> count;
-  for (const auto& p : pts) {
-    const VoxelKey key{static_cast<std::int64_t>(std::floor(p.x() * inv)), static_cast<std::int64_t>(std::floor(p.y() * inv)),
-                       static_cast<std::int64_t>(std::floor(p.z() * inv))};
-    auto [it, inserted] = index.emplace(key, sum.size());
-    if (inserted) {
-      sum.push_back(p);
-      count.push_back(1);
-    } else {
-      sum[it->second] += p;
-      ++count[it->second];
-    }
-  }
-  for (std::size_t i = 0; i < sum.size(); ++i) sum[i] /= count[i];
-  return sum;
-}
-
 std::vector<Eigen::Matrix3d> planeCovariances(const std::vector<Eigen::Vector3d>& points, int k, double plane_epsilon) {
   CloudAdaptor adaptor{&points};
-  KdTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+  KdTree tree(3, adaptor, map::kdTreeParams());
   tree.buildIndex();
   return covariancesWithTree(points, tree, k, plane_epsilon);
 }
@@ -109,7 +69,7 @@ GicpResult gicp(const std::vector<Eigen::Vector3d>& source, const std::vector<Ei
   if (source.empty() || target.size() < 3) return result;
 
   CloudAdaptor target_adaptor{&target};
-  KdTree target_tree(3, target_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+  KdTree target_tree(3, target_adaptor, map::kdTreeParams());
   target_tree.buildIndex();
   const std::vector<Eigen::Matrix3d> target_covs =
       covariancesWithTree(target, target_tree, cfg.covariance_neighbours, cfg.plane_epsilon);

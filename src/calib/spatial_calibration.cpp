@@ -50,8 +50,8 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
                                                   const std::optional<Eigen::Isometry3d>& guess,
                                                   const SpatialCalibrationConfig& cfg) {
   SpatialCalibrationResult res;
-  const auto solid = voxelCentroids(inRange(solid_in, cfg.min_range_m, cfg.max_range_m), cfg.target_voxel_m);
-  const auto spinning = voxelCentroids(inRange(spinning_in, cfg.min_range_m, cfg.max_range_m), cfg.source_voxel_m);
+  const auto solid = map::voxelCentroids(inRange(solid_in, cfg.min_range_m, cfg.max_range_m), cfg.target_voxel_m);
+  const auto spinning = map::voxelCentroids(inRange(spinning_in, cfg.min_range_m, cfg.max_range_m), cfg.source_voxel_m);
   res.solid_points = static_cast<int>(solid.size());
   if (static_cast<int>(solid.size()) < cfg.min_points || static_cast<int>(spinning.size()) < cfg.min_points) {
     res.message = "too few points to calibrate (solid-state " + std::to_string(solid.size()) + ", spinning " +

@@ -87,7 +87,7 @@ std::vector<SensorRotation> sweepRotations(const std::vector<LidarScan>& sweeps,
     const bool pair = !current.points.empty() && !next.points.empty() &&
                       toSec(sweeps[k + 1].start_ns - sweeps[k].start_ns) <= 0.15;
     if (pair) {
-      const backend::IcpTarget target(backend::voxelCentroids(toVec(current), icp.voxel_fine_m));
+      const backend::IcpTarget target(map::voxelCentroids(toVec(current), icp.voxel_fine_m));
       const backend::IcpResult r = backend::alignPointToPlane(toVec(next), target, prior, icp);
       if (r.converged) {
         prior = r.T_target_source;  // the next pair moves about the same

@@ -93,7 +93,7 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
       std::vector<Eigen::Vector3d> pts;
       pts.reserve(sweep.points_body.size());
       for (const Point& p : sweep.points_body) pts.push_back(p.xyz.cast<double>());
-      node.cloud_body = backend::voxelCentroids(pts, cfg_.loop_cloud_voxel_m);
+      node.cloud_body = map::voxelCentroids(pts, cfg_.loop_cloud_voxel_m);
     }
     const int k = graph_.addKeyframe(std::move(node));
     if (cfg_.clean_map && sweep.view) views_[static_cast<std::size_t>(k)] = sweep.view;

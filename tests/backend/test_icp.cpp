@@ -19,7 +19,7 @@ TEST(PointToPlaneIcp, RecoversAKnownOffsetBetweenTwoScansOfARoom) {
   const Eigen::Isometry3d T_a_b = pose(0.6, -0.4, 0.05, 6 * kDeg, 1 * kDeg, -0.5 * kDeg);
   const auto cloud_a = testing::scan(scene, T_world_a, 1);
   const auto cloud_b = testing::scan(scene, T_world_a * T_a_b, 2);
-  const IcpTarget target(voxelCentroids(cloud_a, 0.1));
+  const IcpTarget target(map::voxelCentroids(cloud_a, 0.1));
   const IcpResult r = alignPointToPlane(cloud_b, target, Eigen::Isometry3d::Identity());
   ASSERT_TRUE(r.converged);
   const Eigen::Isometry3d err = T_a_b.inverse() * r.T_target_source;
@@ -37,7 +37,7 @@ TEST(PointToPlaneIcp, FlagsAFeaturelessCorridorAsDegenerateAlongItsAxis) {
   const auto scene = testing::corridor(200.0, 4.0, /*doors=*/false);
   const auto cloud_a = testing::scan(scene, pose(0, 0, 1.0, 0), 3, 0.01, 20.0);
   const auto cloud_b = testing::scan(scene, pose(0.5, 0.1, 1.0, 2 * kDeg), 4, 0.01, 20.0);
-  const IcpTarget target(voxelCentroids(cloud_a, 0.1));
+  const IcpTarget target(map::voxelCentroids(cloud_a, 0.1));
   const IcpResult r = alignPointToPlane(cloud_b, target, Eigen::Isometry3d::Identity());
   ASSERT_TRUE(r.converged);
   std::printf("corridor: min eig %.4f along (%.2f %.2f %.2f)\n", r.min_translation_eigenvalue,
@@ -48,7 +48,7 @@ TEST(PointToPlaneIcp, FlagsAFeaturelessCorridorAsDegenerateAlongItsAxis) {
 
 TEST(PointToPlaneIcp, VoxelCentroidsKeepsOnePointPerVoxel) {
   const std::vector<Eigen::Vector3d> pts{{0.1, 0.1, 0.1}, {0.3, 0.3, 0.3}, {1.5, 0.2, 0.2}};
-  const auto out = voxelCentroids(pts, 1.0);
+  const auto out = map::voxelCentroids(pts, 1.0);
   ASSERT_EQ(out.size(), 2u);
   EXPECT_TRUE(out[0].isApprox(Eigen::Vector3d(0.2, 0.2, 0.2)));
   EXPECT_TRUE(out[1].isApprox(pts[2]));

@@ -17,7 +17,7 @@ KeyframeNode keyframe(double t_s, const Eigen::Isometry3d& T_world_body_odom, st
   KeyframeNode n;
   n.stamp_ns = fromSec(t_s);
   n.T_world_body_odom = T_world_body_odom;
-  n.cloud_body = voxelCentroids(cloud, 0.1);
+  n.cloud_body = map::voxelCentroids(cloud, 0.1);
   return n;
 }
 

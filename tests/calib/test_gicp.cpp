@@ -15,8 +15,8 @@ TEST(Gicp, RecoversAKnownTransformBetweenTwoNoiselessScansOfARoom) {
   const Eigen::Isometry3d T_world_a = pose(0, 0, 1.2, 0.0);
   const Eigen::Isometry3d T_a_b = pose(0.15, -0.1, 0.05, 4 * kDeg, 1 * kDeg, -2 * kDeg);
   // Dense target, sparser source, distinct sample positions.
-  const auto target = voxelCentroids(xyz(solidFrame(scene, T_world_a, 1, 0.0, 40000)), 0.05);
-  const auto source = voxelCentroids(xyz(solidFrame(scene, T_world_a * T_a_b, 2, 0.0, 20000)), 0.05);
+  const auto target = map::voxelCentroids(xyz(solidFrame(scene, T_world_a, 1, 0.0, 40000)), 0.05);
+  const auto source = map::voxelCentroids(xyz(solidFrame(scene, T_world_a * T_a_b, 2, 0.0, 20000)), 0.05);
   const GicpResult r = gicp(source, target, Eigen::Isometry3d::Identity());
   ASSERT_TRUE(r.converged);
   const Eigen::Isometry3d err = T_a_b.inverse() * r.T_target_source;
@@ -32,8 +32,8 @@ TEST(Gicp, StaysWithinACentimetreWithOneCentimetreRangeNoise) {
   const Scene scene = office();
   const Eigen::Isometry3d T_world_a = pose(0, 0, 1.2, 0.3);
   const Eigen::Isometry3d T_a_b = pose(-0.2, 0.1, -0.05, -5 * kDeg, -1 * kDeg, 1 * kDeg);
-  const auto target = voxelCentroids(xyz(solidFrame(scene, T_world_a, 3, 0.01, 40000)), 0.05);
-  const auto source = voxelCentroids(xyz(solidFrame(scene, T_world_a * T_a_b, 4, 0.01, 20000)), 0.05);
+  const auto target = map::voxelCentroids(xyz(solidFrame(scene, T_world_a, 3, 0.01, 40000)), 0.05);
+  const auto source = map::voxelCentroids(xyz(solidFrame(scene, T_world_a * T_a_b, 4, 0.01, 20000)), 0.05);
   const GicpResult r = gicp(source, target, Eigen::Isometry3d::Identity());
   ASSERT_TRUE(r.converged);
   const Eigen::Isometry3d err = T_a_b.inverse() * r.T_target_source;

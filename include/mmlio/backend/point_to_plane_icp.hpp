@@ -14,11 +14,10 @@
 #include <memory>
 #include <vector>
 
+#include "mmlio/map/kd_tree.hpp"
+
 namespace mmlio::backend {
 
-/// One point per occupied voxel of edge leaf_m (the centroid), in first-occupation order.
-/// leaf_m <= 0 returns the input.
-std::vector<Eigen::Vector3d> voxelCentroids(const std::vector<Eigen::Vector3d>& pts, double leaf_m);
 
 /// A registration target: points, a k-d tree over them and a normal per point (PCA of its
 /// neighbours; invalid where the neighbourhood is not a plane: edges, corners, scan lines).

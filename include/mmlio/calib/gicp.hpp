@@ -16,6 +16,8 @@
 #include <Eigen/Geometry>
 #include <vector>
 
+#include "mmlio/map/kd_tree.hpp"
+
 namespace mmlio::calib {
 
 struct GicpConfig {
@@ -50,8 +52,5 @@ std::vector<Eigen::Matrix3d> planeCovariances(const std::vector<Eigen::Vector3d>
 GicpResult gicp(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
                 const Eigen::Isometry3d& T_target_source_guess, const GicpConfig& cfg = GicpConfig());
 
-/// One point per occupied voxel of edge leaf_m (the centroid), in first-occupation order.
-/// leaf_m <= 0 returns the input.
-std::vector<Eigen::Vector3d> voxelCentroids(const std::vector<Eigen::Vector3d>& pts, double leaf_m);
 
 }  // namespace mmlio::calib
