@@ -1,5 +1,9 @@
 #include "mmlio/pipeline/online_pipeline.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
 #include "mmlio/core/log.hpp"
 
 #include "mmlio/pipeline/odometry_setup.hpp"
@@ -9,6 +13,8 @@ namespace {
 
 constexpr double kMaxScanJumpS = 2.0;       // a scan further after its LiDAR's previous one ...
 constexpr int kScanJumpConfirmations = 3;   // ... is dropped unless this many in a row agree
+constexpr double kTimeBaseJumpS = 1.0;      // the IMU resuming this much later, every LiDAR alike ...
+constexpr double kTimeBaseAgreementS = 0.3; // ... within this: the stream's time base jumped
 
 lidar::SweepAligner::Config alignerConfig(const io::RigConfig& cfg, const std::string& mode) {
   lidar::SweepAligner::Config c;
@@ -26,15 +32,53 @@ OnlinePipeline::OnlinePipeline(const io::RigConfig& cfg, const std::string& mode
 }
 
 void OnlinePipeline::addImu(const ImuSample& sample) {
-  if (!imu_gate_.accept(sample)) return;
-  odometry_.addImu(sample);
+  ImuSample s = sample;
+  s.stamp_ns -= shift_ns_;
+  const Stamp last_ns = imu_gate_.lastNs();
+  if (!imu_gate_.accept(s)) return;
+  if (last_ns != std::numeric_limits<Stamp>::min()) {
+    const Stamp gap_ns = s.stamp_ns - last_ns;
+    if (gap_ns > fromSec(kTimeBaseJumpS) && timeBaseJumped(gap_ns)) {
+      // The gate confirmed the IMU's jump on this sample, the LiDARs jumped alike: continue the
+      // stream as if only the samples the gate held back had passed.
+      const int held_back = ImuGate::Config().jump_confirmations;
+      const Stamp shift = gap_ns - held_back * std::max<Stamp>(imu_period_ns_, 1);
+      time_jumps_.push_back({sample.stamp_ns, shift_ns_ + shift});
+      log::warn("time base jumped by ", toSec(gap_ns), " s at ", toSec(sample.stamp_ns),
+                " s (IMU and every LiDAR together): continuing as if no time passed; outputs keep the input's stamps");
+      shift_ns_ += shift;
+      s.stamp_ns -= shift;
+      imu_gate_.shiftBack(shift);
+      for (auto& [sensor, jump] : scan_jumps_) jump.run = 0;
+    } else if (gap_ns <= fromSec(kTimeBaseJumpS)) {
+      imu_period_ns_ = gap_ns;
+    }
+  }
+  odometry_.addImu(s);
   drain(false);
+}
+
+bool OnlinePipeline::timeBaseJumped(Stamp imu_jump_ns) const {
+  // Every LiDAR's latest scans were held back for jumping by about as much as the IMU did.
+  for (const auto& [sensor, offset] : offset_s_) {
+    const auto j = scan_jumps_.find(sensor);
+    if (j == scan_jumps_.end() || j->second.run == 0) return false;
+    if (std::abs(toSec(j->second.size_ns - imu_jump_ns)) > kTimeBaseAgreementS) return false;
+  }
+  return !offset_s_.empty();
+}
+
+Stamp OnlinePipeline::externalStamp(Stamp internal_ns) const {
+  Stamp shift = 0;
+  for (const TimeBaseJump& j : time_jumps_)
+    if (internal_ns >= j.at_ns - j.shift_ns) shift = j.shift_ns;
+  return internal_ns + shift;
 }
 
 void OnlinePipeline::addScan(LidarScan scan) {
   const auto it = offset_s_.find(scan.sensor);
   if (it == offset_s_.end()) return;
-  scan.start_ns += fromSec(it->second);  // t_imu = t_stamp + offset
+  scan.start_ns += fromSec(it->second) - shift_ns_;  // t_imu = t_stamp + offset
   const auto drop = [&](std::size_t* count, const std::string& why) {
     if ((*count)++ == 0) log::warn(scan.sensor, " scan dropped: ", why, " (further ones are counted in the report)");
   };
@@ -45,6 +89,7 @@ void OnlinePipeline::addScan(LidarScan scan) {
       // A lone stamp far ahead is corrupt; a LiDAR that stays there had a real gap.
       Jump& jump = scan_jumps_[scan.sensor];
       const bool continues = jump.run > 0 && scan.start_ns > jump.last_ns && scan.start_ns - jump.last_ns < fromSec(1.0);
+      if (!continues) jump.size_ns = scan.start_ns - last->second;
       jump.run = continues ? jump.run + 1 : 1;
       jump.last_ns = scan.start_ns;
       if (jump.run < kScanJumpConfirmations)

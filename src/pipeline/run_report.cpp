@@ -77,7 +77,7 @@ bool RunReport::inputDegraded() const {
   return input.imu_dropped.total() + input.scans_out_of_order + input.scans_stamp_jumps + input.skipped_messages +
                  input.queue_dropped_imu + input.queue_dropped_scans >
              0 ||
-         input.truncated;
+         input.truncated || !input.time_base_jumps.empty();
 }
 
 Json toJson(const RunReport& r) {
@@ -98,6 +98,9 @@ Json toJson(const RunReport& r) {
                        {"out_of_order", r.input.imu_dropped.out_of_order},
                        {"stamp_jumps", r.input.imu_dropped.jumped}};
   in["scans_dropped"] = {{"out_of_order", r.input.scans_out_of_order}, {"stamp_jumps", r.input.scans_stamp_jumps}};
+  Json jumps = Json::array();
+  for (const auto& j : r.input.time_base_jumps) jumps.push_back({{"at_s", j.at_s}, {"shift_s", j.shift_s}});
+  in["time_base_jumps"] = jumps;
   if (r.input.queue_dropped_imu + r.input.queue_dropped_scans > 0 || r.input.source == "live")
     in["queue_dropped"] = {{"imu", r.input.queue_dropped_imu}, {"scans", r.input.queue_dropped_scans}};
   Json decoded = Json::object();

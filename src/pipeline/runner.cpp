@@ -120,8 +120,8 @@ RunResult runBag(const RunOptions& options) {
   report.status = !result.complete ? "incomplete: " + result.error
                   : result.interrupted ? std::string("interrupted")
                   : report.inputDegraded()
-                      ? std::string("degraded: input dropped (see input.imu_dropped, input.scans_dropped, "
-                                    "input.skipped_messages, input.truncated)")
+                      ? std::string("degraded: input dropped or re-timed (see input.imu_dropped, input.scans_dropped, "
+                                    "input.skipped_messages, input.truncated, input.time_base_jumps)")
                       : std::string("complete");
 
   if (!options.out_dir.empty()) report = system.writeOutputs(options.out_dir, std::move(report), options.gt_path);

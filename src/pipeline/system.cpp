@@ -29,7 +29,7 @@ void System::onSweep(const estimator::SweepResult& r) {
   if (r.status == estimator::SweepResult::Status::kDegraded) ++sweeps_.degraded;
   else ++sweeps_.tracked;
   Stopwatch handoff;
-  odometry_poses_.push_back({r.state.stamp_ns, r.state.pose()});
+  odometry_poses_.push_back({online_.externalStamp(r.state.stamp_ns), r.state.pose()});
   degeneracy_.add(r);
   dynamic_.feature_points_rejected += r.dynamic_points;
   dynamic_.sweeps_with_rejections += r.dynamic_points > 0;
@@ -60,8 +60,14 @@ void System::finish() {
   }
 }
 
+Trajectory System::inputTime(Trajectory trajectory) const {
+  if (online_.timeBaseJumps().empty()) return trajectory;
+  for (StampedPose& p : trajectory) p.stamp_ns = online_.externalStamp(p.stamp_ns);
+  return trajectory;
+}
+
 Trajectory System::trajectory() const {
-  return mapping_.read([](const MappingBackend& b) { return b.correctedTrajectory(); });
+  return inputTime(mapping_.read([](const MappingBackend& b) { return b.correctedTrajectory(); }));
 }
 
 Eigen::Isometry3d System::mapFromOdom() const {
@@ -83,6 +89,8 @@ RunReport System::report() const {
   r.input.imu_dropped = online_.imuGate().counts();
   r.input.scans_out_of_order = online_.scanDrops().out_of_order;
   r.input.scans_stamp_jumps = online_.scanDrops().jumped;
+  for (const OnlinePipeline::TimeBaseJump& j : online_.timeBaseJumps())
+    r.input.time_base_jumps.push_back({toSec(j.at_ns), toSec(j.shift_ns)});
   r.imu_init = odometry().imuInit();
   r.sweeps = sweeps_;
   r.sweeps.processed = online_.sweepsProcessed();
@@ -115,7 +123,7 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
   std::map<std::string, std::vector<Point>> lidar_maps;
   Stopwatch assembly;
   mapping_.read([&](const MappingBackend& b) {
-    trajectory = b.correctedTrajectory();
+    trajectory = inputTime(b.correctedTrajectory());
     map_points = b.map();
     if (cfg_.mapping.dynamic_map) dynamic_map = b.dynamicMap();
     for (const std::string& lidar : b.lidarNames()) lidar_maps[lidar] = b.lidarMap(lidar);

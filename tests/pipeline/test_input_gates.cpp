@@ -26,16 +26,21 @@ ImuSample at(double t_s) {
 }
 
 /// The simulated office of `duration_s` through the streaming pipeline (HVI, true calibration), its
-/// scans and IMU samples edited as testing::replay does; counts the degraded sweeps if asked.
+/// scans and IMU samples edited as testing::replay does; counts the degraded sweeps and the
+/// time-base jumps if asked. Poses carry the input's stamps.
 Trajectory runOffice(const sim::Simulator& sim, const std::function<void(int, LidarScan&)>& edit,
-                     const std::function<void(std::size_t, ImuSample&)>& edit_imu, std::size_t* degraded = nullptr) {
+                     const std::function<void(std::size_t, ImuSample&)>& edit_imu, std::size_t* degraded = nullptr,
+                     std::size_t* time_base_jumps = nullptr) {
   Trajectory trajectory;
+  pipeline::OnlinePipeline* pipeline = nullptr;
   pipeline::OnlinePipeline online(testing::simRigConfig(sim), "hvi", [&](const estimator::SweepResult& r) {
     if (r.status == estimator::SweepResult::Status::kInitializing) return;
-    trajectory.push_back({r.state.stamp_ns, r.state.pose()});
+    trajectory.push_back({pipeline->externalStamp(r.state.stamp_ns), r.state.pose()});
     if (degraded) *degraded += r.status == estimator::SweepResult::Status::kDegraded;
   });
+  pipeline = &online;
   testing::replay(sim, online, edit, edit_imu);
+  if (time_base_jumps) *time_base_jumps = online.timeBaseJumps().size();
   return trajectory;
 }
 
@@ -144,6 +149,38 @@ TEST(InputGates, AnImuGapIsNotInterpolatedTheLidarsCarryTheSweepsThrough) {
   EXPECT_GE(gap_degraded, 15u);  // the sweeps of the gap are marked
   EXPECT_GE(gapped.size() + 2, clean.size());
   EXPECT_LT(gap_ate, 2.0 * clean_ate) << "clean " << clean_ate;
+}
+
+}  // namespace mmlio
+
+namespace mmlio {
+
+TEST(InputGates, AJumpOfTheWholeStreamsTimeBaseIsARestartNotAGapToExtrapolate) {
+  const sim::Simulator sim = office(16.0);
+  const Trajectory clean = runOffice(sim, {}, {});
+  // Every stamp from 6 s on (walking) is 5 s later: IMU and both LiDARs (a clock re-sync).
+  std::size_t jumps = 0;
+  const Stamp jump_at = sim.groundTruth().front().stamp_ns + fromSec(6.0);
+  const Trajectory jumped = runOffice(
+      sim, [&](int, LidarScan& scan) { if (scan.start_ns >= jump_at) scan.start_ns += fromSec(5.0); },
+      [&](std::size_t, ImuSample& s) { if (s.stamp_ns >= jump_at) s.stamp_ns += fromSec(5.0); }, nullptr, &jumps);
+  EXPECT_EQ(jumps, 1u);
+  // Scored against the truth re-timed the same way: the poses keep the input's stamps.
+  Trajectory truth = sim.groundTruth();
+  for (auto& p : truth)
+    if (p.stamp_ns >= jump_at) p.stamp_ns += fromSec(5.0);
+  const double clean_ate = eval::evaluate(sim.groundTruth(), clean).ate_rmse_m;
+  const eval::EvalResult ev = eval::evaluate(truth, jumped);
+  std::printf("office 16 s: clean ATE %.4f m; stamps +5 s from 6 s: ATE %.4f m over %zu poses\n", clean_ate,
+              ev.ate_rmse_m, jumped.size());
+  EXPECT_GE(jumped.size() + 3, clean.size());
+  EXPECT_LT(ev.ate_rmse_m, 2.0 * clean_ate) << "clean " << clean_ate;
+
+  // The IMU alone jumping is no time-base jump (its gap is handled as a gap).
+  std::size_t imu_only = 0;
+  runOffice(sim, {}, [&](std::size_t, ImuSample& s) { if (s.stamp_ns >= jump_at) s.stamp_ns += fromSec(5.0); }, nullptr,
+            &imu_only);
+  EXPECT_EQ(imu_only, 0u);
 }
 
 }  // namespace mmlio

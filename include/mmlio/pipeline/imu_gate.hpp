@@ -31,6 +31,10 @@ class ImuGate {
   /// True if the sample may reach the estimator.
   bool accept(const ImuSample& sample);
   const Counts& counts() const { return counts_; }
+  /// Stamp of the last accepted sample (min() before the first).
+  Stamp lastNs() const { return last_ns_; }
+  /// The stream's time base moved back by delta (see OnlinePipeline): later stamps arrive shifted.
+  void shiftBack(Stamp delta_ns) { last_ns_ -= delta_ns; }
 
  private:
   Config cfg_;

@@ -6,6 +6,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "mmlio/estimator/odometry.hpp"
 #include "mmlio/io/rig_config.hpp"
@@ -39,6 +40,18 @@ class OnlinePipeline {
   const ScanDrops& scanDrops() const { return scan_drops_; }
   std::size_t sweepsProcessed() const { return processed_; }
 
+  /// A jump of the whole stream's time base: the IMU and every LiDAR resumed together `jump_s`
+  /// after their last data (a clock re-sync, bags joined, a paused recording). The pipeline then
+  /// continues as if no time had passed (stamps shifted back) instead of extrapolating the motion
+  /// over the gap; the estimator's stamps stay shifted, externalStamp() maps them back.
+  struct TimeBaseJump {
+    Stamp at_ns = 0;     // first shifted stamp, in the stream's (external) time
+    Stamp shift_ns = 0;  // subtracted from every later stamp
+  };
+  const std::vector<TimeBaseJump>& timeBaseJumps() const { return time_jumps_; }
+  /// An estimator stamp in the stream's own time (the bag's stamps).
+  Stamp externalStamp(Stamp internal_ns) const;
+
  private:
   void drain(bool all);
 
@@ -51,8 +64,13 @@ class OnlinePipeline {
   struct Jump {
     Stamp last_ns = 0;
     int run = 0;
+    Stamp size_ns = 0;  // how far the run's first scan lay after the last accepted one
   };
   std::map<std::string, Jump> scan_jumps_;
+  bool timeBaseJumped(Stamp imu_jump_ns) const;
+  Stamp shift_ns_ = 0;                 // subtracted from every incoming stamp
+  Stamp imu_period_ns_ = 0;            // latest spacing of accepted IMU samples
+  std::vector<TimeBaseJump> time_jumps_;
   std::deque<lidar::AlignedSweep> pending_;
   SweepCallback on_sweep_;
   std::size_t processed_ = 0;

@@ -7,6 +7,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "mmlio/eval/evaluation.hpp"
 #include "mmlio/imu/initializer.hpp"
@@ -30,6 +31,10 @@ struct RunReport {
     std::size_t scans_out_of_order = 0, scans_stamp_jumps = 0;
     std::size_t queue_dropped_imu = 0, queue_dropped_scans = 0;  // live: processing queue full
     bool truncated = false;
+    struct TimeBaseJump {
+      double at_s = 0.0, shift_s = 0.0;  // input stamp where it happened; stamps shifted back by
+    };
+    std::vector<TimeBaseJump> time_base_jumps;  // the whole stream's time base jumped (see OnlinePipeline)
     std::map<std::string, io::DecodeStats> decoded;  // per LiDAR
   };
   struct Sweeps {

@@ -64,6 +64,8 @@ class System {
 
  private:
   void onSweep(const estimator::SweepResult& r);
+  /// Estimator stamps back in the input's time (they differ after a time-base jump).
+  Trajectory inputTime(Trajectory trajectory) const;
 
   io::RigConfig cfg_;
   std::string mode_;
