@@ -1,5 +1,6 @@
 // mmlio run BAG: the main job, bag in -> trajectory, map and report out.
 #include <atomic>
+#include <cstdlib>
 #include <csignal>
 #include <filesystem>
 #include <iostream>
@@ -20,7 +21,13 @@ struct RunArgs {
   std::string bag, config, out = "mmlio_out", mode, calib, gt;
   bool no_progress = false, no_loop = false;
   double duration_s = 0.0;
+  double max_degraded_percent = 25.0;
 };
+
+// Exit codes (README): 0 trustworthy outputs, 1 error (nothing usable written), 2 internal error,
+// 3 outputs written but not trustworthy (interrupted, bag ended early, too many degraded sweeps
+// or too short a trajectory).
+constexpr int kExitUntrusted = 3;
 
 /// Applies `calibration:` from the config or --calib (which wins). `auto` calibrates on the bag's
 /// start and writes the result to OUT/calib.yaml.
@@ -71,6 +78,7 @@ void run(const RunArgs& a) {
   options.gt_path = a.gt;
   options.max_duration_s = a.duration_s;
   options.stop = &g_stop;
+  options.max_degraded_fraction = a.max_degraded_percent / 100.0;
   std::signal(SIGINT, onStopSignal);
   std::signal(SIGTERM, onStopSignal);
   const pipeline::RunResult r = pipeline::runBag(options);
@@ -81,8 +89,10 @@ void run(const RunArgs& a) {
             << "map:        " << a.out << "/map.pcd (" << r.map_points << " points)\n"
             << "report:     " << a.out << "/report.json, " << a.out << "/report.md\n\n"
             << r.timing.table();
-  if (!r.complete) throw Error("bag ended early (" + r.error + "); outputs hold the poses computed before it");
-  if (r.interrupted) throw Error("interrupted; outputs hold the poses computed before it");
+  if (!r.untrusted.empty()) {
+    std::cerr << "mmlio: outputs written but not trustworthy: " << r.untrusted << " (see " << a.out << "/report.json)\n";
+    std::exit(kExitUntrusted);
+  }
 }
 
 }  // namespace
@@ -103,6 +113,11 @@ void registerRunCommand(CLI::App& app) {
   cmd->add_option("--duration", args->duration_s, "Stop after this many seconds of the bag");
   cmd->add_flag("--no-progress", args->no_progress, "No progress bar");
   cmd->add_flag("--no-loop", args->no_loop, "Disable loop closure");
+  cmd->add_option("--max-degraded", args->max_degraded_percent,
+                  "Exit code 3 (outputs not trustworthy) when more than this % of the sweeps are degraded or the "
+                  "poses cover less than 100 - this % of the stream")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 100.0));
   cmd->callback([args] { run(*args); });
 }
 

@@ -83,6 +83,8 @@ bool RunReport::inputDegraded() const {
 Json toJson(const RunReport& r) {
   Json rep = Json::object();
   rep["status"] = r.status;
+  rep["trustworthy"] = r.untrusted.empty();
+  if (!r.untrusted.empty()) rep["untrusted_because"] = r.untrusted;
 
   Json& in = rep["input"];
   in["source"] = r.input.source;
@@ -118,7 +120,8 @@ Json toJson(const RunReport& r) {
                      {"message", r.imu_init.message}};
   rep["sweeps"] = {{"processed", r.sweeps.processed}, {"tracked", r.sweeps.tracked},
                    {"degraded", r.sweeps.degraded},   {"initialising", r.sweeps.initialising},
-                   {"keyframes", r.sweeps.keyframes}, {"degenerate", r.sweeps.degenerate}};
+                   {"keyframes", r.sweeps.keyframes}, {"degenerate", r.sweeps.degenerate},
+                   {"degraded_fraction", r.sweeps.degraded_fraction}, {"coverage", r.sweeps.coverage}};
   rep["degeneracy"] = r.degeneracy;
 
   Json features = Json::object();

@@ -1,5 +1,6 @@
 #include "mmlio/pipeline/runner.hpp"
 
+#include <cstdio>
 #include <limits>
 #include <filesystem>
 #include <fstream>
@@ -124,6 +125,26 @@ RunResult runBag(const RunOptions& options) {
                                     "input.skipped_messages, input.truncated, input.time_base_jumps)")
                       : std::string("complete");
 
+  // Trust: the stream after initialisation is covered by poses, and few of them were degraded.
+  const Trajectory& poses = system.odometryTrajectory();
+  if (!poses.empty()) {
+    const double span_s = toSec(odometry.lastImuNs() - poses.front().stamp_ns);
+    report.sweeps.coverage = span_s > 0 ? toSec(poses.back().stamp_ns - poses.front().stamp_ns) / span_s : 1.0;
+    report.sweeps.degraded_fraction =
+        static_cast<double>(report.sweeps.degraded) / static_cast<double>(std::max<std::size_t>(poses.size(), 1));
+    const double limit = options.max_degraded_fraction;
+    char why[160] = "";
+    if (report.sweeps.degraded_fraction > limit)
+      std::snprintf(why, sizeof why, "%.0f %% of the sweeps degraded (limit %.0f %%)",
+                    100.0 * report.sweeps.degraded_fraction, 100.0 * limit);
+    else if (report.sweeps.coverage < 1.0 - limit)
+      std::snprintf(why, sizeof why, "poses cover %.0f %% of the stream after initialisation (limit %.0f %%)",
+                    100.0 * report.sweeps.coverage, 100.0 * (1.0 - limit));
+    result.untrusted = why;
+  }
+  if (!result.complete) result.untrusted = "the bag ended early: " + result.error;
+  if (result.interrupted) result.untrusted = "interrupted";
+  report.untrusted = result.untrusted;
   if (!options.out_dir.empty()) report = system.writeOutputs(options.out_dir, std::move(report), options.gt_path);
   result.trajectory = system.trajectory();
   result.map_points = report.outputs.map_points;

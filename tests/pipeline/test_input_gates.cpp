@@ -11,6 +11,7 @@
 
 #include "mmlio/eval/evaluation.hpp"
 #include "mmlio/core/error.hpp"
+#include "mmlio/io/bag_writer.hpp"
 #include "mmlio/pipeline/imu_gate.hpp"
 #include "mmlio/pipeline/runner.hpp"
 #include "sim_feed.hpp"
@@ -184,3 +185,59 @@ TEST(InputGates, AJumpOfTheWholeStreamsTimeBaseIsARestartNotAGapToExtrapolate) {
 }
 
 }  // namespace mmlio
+
+namespace mmlio::pipeline {
+
+/// The simulated office as a bag (as `mmlio simulate` writes it), without the IMU samples `keep_imu`
+/// refuses.
+std::string officeBag(const sim::Simulator& sim, const std::string& name, const std::function<bool(const ImuSample&)>& keep_imu) {
+  const std::string path = (std::filesystem::temp_directory_path() / name).string();
+  io::BagWriter bag(path);
+  const std::vector<ImuSample>& imu = sim.imu();
+  const Stamp kNever = std::numeric_limits<Stamp>::max();
+  std::size_t i = 0;
+  int l = 0, v = 0;
+  const auto livox = [&](int k) { return k < sim.numLivoxFrames() ? sim.startNs() + k * 100000000LL : kNever; };
+  const auto velodyne = [&](int k) { return k < sim.numVelodyneSweeps() ? sim.velodyneTrueStartNs(k) : kNever; };
+  while (i < imu.size() || livox(l) != kNever || velodyne(v) != kNever) {
+    const Stamp ti = i < imu.size() ? imu[i].stamp_ns : kNever;
+    if (ti <= livox(l) && ti <= velodyne(v)) {
+      if (keep_imu(imu[i])) bag.writeImu("/livox/imu", "livox_frame", imu[i], true);
+      ++i;
+    } else if (livox(l) <= velodyne(v)) {
+      bag.writeLivoxCloud("/livox/lidar", "livox_frame", sim.livoxFrame(l++));
+    } else {
+      bag.writeVelodyneCloud("/velodyne_points", "velodyne", sim.velodyneSweep(v++));
+    }
+  }
+  bag.close();
+  return path;
+}
+
+TEST(RunBag, OutputsAreFlaggedUntrustedWhenTooManySweepsAreDegraded) {
+  const sim::Simulator sim = office(8.0);
+  const Stamp imu_ends = sim.startNs() + fromSec(5.0);
+  RunOptions options;
+  options.config = testing::simRigConfig(sim);
+  options.config.mapping.loop_enabled = false;
+  options.progress = false;
+  options.out_dir = (std::filesystem::temp_directory_path() / "mmlio_untrusted_out").string();
+
+  options.bag_path = officeBag(sim, "mmlio_clean.bag", [](const ImuSample&) { return true; });
+  const RunResult clean = runBag(options);
+  EXPECT_TRUE(clean.untrusted.empty()) << clean.untrusted;
+
+  // The IMU stops 5 s into the 8 s: the last sweeps are registered by the LiDARs alone.
+  options.bag_path = officeBag(sim, "mmlio_imu_stops.bag", [&](const ImuSample& s) { return s.stamp_ns < imu_ends; });
+  const RunResult stopped = runBag(options);
+  EXPECT_NE(stopped.untrusted.find("sweeps degraded"), std::string::npos) << stopped.untrusted;
+  EXPECT_FALSE(toJson(stopped.report)["trustworthy"].get<bool>());
+  std::ifstream written(options.out_dir + "/report.json");
+  const std::string text((std::istreambuf_iterator<char>(written)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"untrusted_because\""), std::string::npos);
+  std::filesystem::remove_all(options.out_dir);
+  std::filesystem::remove(options.bag_path);
+  std::filesystem::remove(std::filesystem::temp_directory_path() / "mmlio_clean.bag");
+}
+
+}  // namespace mmlio::pipeline

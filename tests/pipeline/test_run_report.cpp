@@ -34,7 +34,8 @@ TEST(RunReport, JsonKeepsSectionOrderAndWritesNonFiniteAsNull) {
   for (const auto& [k, v] : j.items()) keys.push_back(k);
   ASSERT_GE(keys.size(), 4u);
   EXPECT_EQ(keys[0], "status");
-  EXPECT_EQ(keys[1], "input");
+  EXPECT_EQ(keys[1], "trustworthy");
+  EXPECT_EQ(keys[2], "input");
   EXPECT_EQ(j["input"]["source"], "office.bag");
   EXPECT_EQ(j["input"]["imu_dropped"]["non_finite"], 3);
   EXPECT_EQ(j["features"]["livox"]["mean_edges"], 15.0);

@@ -39,6 +39,8 @@ struct RunReport {
   };
   struct Sweeps {
     std::size_t processed = 0, tracked = 0, degraded = 0, initialising = 0, keyframes = 0, degenerate = 0;
+    double degraded_fraction = 0.0;  // degraded / poses
+    double coverage = 1.0;           // first to last pose over first pose to the stream's end
   };
   struct LidarFigures {
     std::size_t sweeps = 0, points = 0, edges = 0, planes = 0, bad_frames = 0;
@@ -57,6 +59,7 @@ struct RunReport {
   };
 
   std::string status = "complete";  // complete | degraded: ... | interrupted | incomplete: <error>
+  std::string untrusted;            // empty, or why the outputs should not be trusted (exit code 3)
   Input input;
   imu::ImuInitResult imu_init;
   Sweeps sweeps;

@@ -26,6 +26,9 @@ struct RunOptions {
                                   // time, as ONE sequence (long-run memory and drift checks)
   const std::atomic<bool>* stop = nullptr;  // set (e.g. by a signal handler): stop reading, write
                                             // what was computed, status "interrupted"
+  double max_degraded_fraction = 0.25; // more degraded sweeps than this, or a trajectory covering
+                                       // less than 1 - this of the stream after initialisation:
+                                       // RunResult::untrusted says why
 };
 
 struct RunResult {
@@ -37,6 +40,7 @@ struct RunResult {
   bool complete = true;           // false: the bag ended in an error after `trajectory`
   bool interrupted = false;       // options.stop was set: the outputs hold the run so far
   std::string error;
+  std::string untrusted;          // non-empty: why the outputs should not be trusted (also in the report)
 };
 
 /// Runs the whole pipeline. Throws mmlio::Error for unusable input (no bag, no topic, ...);
