@@ -1,5 +1,7 @@
 #include "mmlio/io/bag_source.hpp"
 
+#include <console_bridge/console.h>
+
 #include <rosbag/bag.h>
 #include <rosbag/exceptions.h>
 #include <rosbag/view.h>
@@ -169,6 +171,9 @@ void BagSource::Impl::estimateScanPeriods() {
 }
 
 BagSource::BagSource(const std::string& path, const BagSourceOptions& options) : impl_(std::make_unique<Impl>()) {
+  // rosbag prints every damaged record to stderr through console_bridge; the reader counts them
+  // and warns once per topic instead.
+  console_bridge::setLogLevel(console_bridge::CONSOLE_BRIDGE_LOG_NONE);
   Impl& d = *impl_;
   d.path = path;
   std::string why;
@@ -215,9 +220,10 @@ void BagSource::Impl::openRaw(const BagSourceOptions& options, const std::string
   truncated = true;
   begin_ns = current_ns = raw->beginNs();
   end_ns = raw->endNs();
-  log::warn("bag ", path, " is truncated or unindexed (", why, "): reading its ", raw->messages(),
-            " complete messages (", toSec(end_ns - begin_ns), " s) from the chunks; `rosbag reindex ", path,
-            "` would restore the index");
+  log::warn("bag ", path, " is truncated, unindexed or damaged (", why, "): reading its ", raw->messages(),
+            " complete messages (", toSec(end_ns - begin_ns), " s) from the chunks",
+            raw->damagedChunks() > 0 ? ", past " + std::to_string(raw->damagedChunks()) + " damaged stretch(es)" : "",
+            "; `rosbag reindex ", path, "` would restore the index");
   if (!options.imu_topic.empty()) {
     const std::string imu_key = detail::normalizeTopic(options.imu_topic);
     acc_scale = imuAccScaleFromMean(
@@ -368,5 +374,6 @@ const std::map<std::string, DecodeStats>& BagSource::stats() const { return impl
 std::size_t BagSource::imuCount() const { return impl_->imu_count; }
 std::size_t BagSource::skippedMessages() const { return impl_->skipped; }
 bool BagSource::truncated() const { return impl_->truncated; }
+std::size_t BagSource::damagedChunks() const { return impl_->raw ? impl_->raw->damagedChunks() : 0; }
 
 }  // namespace mmlio::io

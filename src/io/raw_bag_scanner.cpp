@@ -1,5 +1,6 @@
 #include "raw_bag_scanner.hpp"
 
+#include <bzlib.h>
 #include <roslz4/lz4s.h>
 
 #include <algorithm>
@@ -58,47 +59,102 @@ Stamp fieldTime(const Fields& f) {
 
 }  // namespace
 
+namespace {
+
+/// A record at `pos`: its header fields and where its data lies. False when what is there is not
+/// a well-formed record header (damage) or runs past the end of the file.
+struct Record {
+  Fields fields;
+  std::uint64_t data_pos = 0;
+  std::uint32_t data_len = 0;
+};
+bool readRecord(std::ifstream& in, std::uint64_t pos, std::uint64_t file_size, Record* r) {
+  if (pos + 4 > file_size) return false;
+  std::uint8_t len4[4];
+  in.clear();
+  in.seekg(static_cast<std::streamoff>(pos));
+  if (!in.read(reinterpret_cast<char*>(len4), 4)) return false;
+  const std::uint32_t header_len = u32(len4);
+  if (header_len < 4 || header_len > std::min<std::uint64_t>(1u << 20, file_size - pos - 4)) return false;
+  std::vector<std::uint8_t> header(header_len);
+  if (!in.read(reinterpret_cast<char*>(header.data()), header_len)) return false;
+  r->fields.clear();
+  if (!parseFields(header.data(), header.size(), &r->fields) || op(r->fields) == 0) return false;
+  r->data_pos = pos + 4 + header_len + 4;
+  if (r->data_pos > file_size || !in.read(reinterpret_cast<char*>(len4), 4)) return false;
+  r->data_len = u32(len4);
+  return true;
+}
+
+bool plausibleChunk(const Record& r) {
+  const auto c = r.fields.find("compression");
+  const std::string compression = c == r.fields.end() ? "none" : c->second;
+  return op(r.fields) == kOpChunk && (compression == "none" || compression == "lz4" || compression == "bz2") &&
+         fieldU32(r.fields, "size") > 0;
+}
+
+/// The next chunk record after damage at `from`: rosbag writes a chunk header's fields sorted, so
+/// its "op" field (length 4, "op=\x05") lies within the first few dozen bytes; candidates are
+/// checked as whole records. file_size if none.
+std::uint64_t nextChunkAfter(std::ifstream& in, std::uint64_t from, std::uint64_t file_size) {
+  static const std::uint8_t kOpField[] = {4, 0, 0, 0, 'o', 'p', '=', kOpChunk};
+  constexpr std::size_t kBlock = 1 << 20;
+  std::vector<std::uint8_t> buf;
+  for (std::uint64_t base = from; base < file_size; base += kBlock) {
+    const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(kBlock + 64, file_size - base));
+    buf.resize(n);
+    in.clear();
+    in.seekg(static_cast<std::streamoff>(base));
+    if (!in.read(reinterpret_cast<char*>(buf.data()), static_cast<std::streamsize>(n))) return file_size;
+    for (auto it = std::search(buf.begin(), buf.end(), std::begin(kOpField), std::end(kOpField)); it != buf.end();
+         it = std::search(it + 1, buf.end(), std::begin(kOpField), std::end(kOpField))) {
+      const std::uint64_t field = base + static_cast<std::uint64_t>(it - buf.begin());
+      for (std::uint64_t back = 4; back <= 64 && back <= field - from; ++back) {
+        Record r;
+        if (readRecord(in, field - back, file_size, &r) && plausibleChunk(r)) return field - back;
+      }
+    }
+  }
+  return file_size;
+}
+
+}  // namespace
+
 RawBagScanner::RawBagScanner(const std::string& path) : path_(path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error("cannot read bag " + path);
   in.seekg(0, std::ios::end);
   const std::uint64_t file_size = static_cast<std::uint64_t>(in.tellg());
-  in.seekg(13);  // "#ROSBAG V2.0\n"
-  std::uint64_t pos = 13;
+  std::uint64_t pos = 13;  // after "#ROSBAG V2.0\n"
   while (pos + 4 <= file_size) {
-    std::uint8_t len4[4];
-    in.seekg(static_cast<std::streamoff>(pos));
-    if (!in.read(reinterpret_cast<char*>(len4), 4)) break;
-    const std::uint32_t header_len = u32(len4);
-    if (header_len > file_size - pos - 4) break;
-    std::vector<std::uint8_t> header(header_len);
-    if (!in.read(reinterpret_cast<char*>(header.data()), header_len)) break;
-    Fields fields;
-    if (!parseFields(header.data(), header.size(), &fields)) break;
-    const std::uint64_t data_pos = pos + 4 + header_len + 4;
-    if (data_pos > file_size || !in.read(reinterpret_cast<char*>(len4), 4)) break;
-    const std::uint32_t data_len = u32(len4);
-    const std::uint64_t present = std::min<std::uint64_t>(data_len, file_size - data_pos);
-    if (op(fields) == kOpChunk) {
+    Record r;
+    if (!readRecord(in, pos, file_size, &r)) {
+      // Damage (overwritten bytes) or the cut end of the file: go on at the next chunk, if any.
+      const std::uint64_t next = nextChunkAfter(in, pos + 1, file_size);
+      if (next >= file_size) break;
+      ++damaged_chunks_;
+      pos = next;
+      continue;
+    }
+    const std::uint64_t present = std::min<std::uint64_t>(r.data_len, file_size - r.data_pos);
+    if (op(r.fields) == kOpChunk) {
       RawChunk c;
-      c.data_offset = data_pos;
+      c.data_offset = r.data_pos;
       c.data_size = present;
-      c.compression = fields.count("compression") ? fields.at("compression") : "none";
-      c.uncompressed_size = fieldU32(fields, "size");
+      c.compression = r.fields.count("compression") ? r.fields.at("compression") : "none";
+      c.uncompressed_size = fieldU32(r.fields, "size");
       // A partial chunk is only usable uncompressed (its complete records are parsed).
-      if (c.compression == "none" || (c.compression == "lz4" && present == data_len)) {
+      if (c.compression == "none" || present == r.data_len) {
         try {
           parsePayload(chunkPayload(c), nullptr, &c, &connections_);
+          if (c.messages > 0) chunks_.push_back(c);
         } catch (const Error&) {
-          break;
+          ++damaged_chunks_;  // a compressed payload that does not decompress
         }
-        if (c.messages > 0) chunks_.push_back(c);
-      } else {
-        break;  // bz2 or a cut compressed chunk: the readable part ends here
       }
     }
-    if (present < data_len) break;
-    pos = data_pos + data_len;
+    if (present < r.data_len) break;
+    pos = r.data_pos + r.data_len;
   }
 }
 
@@ -111,9 +167,14 @@ std::vector<std::uint8_t> RawBagScanner::chunkPayload(const RawChunk& c) const {
   if (c.compression == "none") return raw;
   std::vector<std::uint8_t> out(c.uncompressed_size);
   unsigned int out_size = c.uncompressed_size;
-  if (roslz4_buffToBuffDecompress(reinterpret_cast<char*>(raw.data()), static_cast<unsigned int>(raw.size()),
-                                  reinterpret_cast<char*>(out.data()), &out_size) != ROSLZ4_OK)
-    throw Error("cannot decompress an lz4 chunk of " + path_);
+  const bool ok = c.compression == "bz2"
+                      ? BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(out.data()), &out_size,
+                                                   reinterpret_cast<char*>(raw.data()),
+                                                   static_cast<unsigned int>(raw.size()), 0, 0) == BZ_OK
+                      : roslz4_buffToBuffDecompress(reinterpret_cast<char*>(raw.data()),
+                                                    static_cast<unsigned int>(raw.size()),
+                                                    reinterpret_cast<char*>(out.data()), &out_size) == ROSLZ4_OK;
+  if (!ok) throw Error("cannot decompress a " + c.compression + " chunk of " + path_);
   out.resize(out_size);
   return out;
 }

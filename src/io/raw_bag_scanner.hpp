@@ -1,7 +1,8 @@
 #pragma once
 // Private helper of src/io: reads the chunks of a ROS1 bag (format 2.0) record by record, without
-// its index, so that a truncated or unindexed bag (recording killed) can still be streamed up to
-// its last complete message. Uncompressed and lz4 chunks; a bz2 chunk ends the readable part.
+// its index, so that a truncated, unindexed or damaged bag (recording killed, bytes overwritten)
+// can still be streamed: up to its last complete message, and past a damaged stretch from the next
+// intact chunk on. Uncompressed, lz4 and bz2 chunks (a cut compressed chunk is lost).
 #include <cstdint>
 #include <map>
 #include <string>
@@ -24,7 +25,7 @@ struct RawMessage {
 struct RawChunk {
   std::uint64_t data_offset = 0;  // file offset of the chunk payload
   std::uint64_t data_size = 0;    // bytes of payload present in the file
-  std::string compression;        // none | lz4
+  std::string compression;        // none | lz4 | bz2
   std::uint32_t uncompressed_size = 0;
   Stamp begin_ns = 0, end_ns = 0;
   std::size_t messages = 0;
@@ -39,6 +40,8 @@ class RawBagScanner {
   std::size_t messages() const;
   Stamp beginNs() const;
   Stamp endNs() const;
+  /// Damaged stretches or chunks skipped (the reader went on at the next intact chunk).
+  std::size_t damagedChunks() const { return damaged_chunks_; }
   /// Messages of chunk i in time order.
   std::vector<RawMessage> readChunk(std::size_t i) const;
 
@@ -51,6 +54,7 @@ class RawBagScanner {
   std::string path_;
   std::map<std::uint32_t, RawConnection> connections_;
   std::vector<RawChunk> chunks_;
+  std::size_t damaged_chunks_ = 0;
 };
 
 }  // namespace mmlio::io::detail

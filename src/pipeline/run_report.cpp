@@ -77,7 +77,7 @@ bool RunReport::inputDegraded() const {
   return input.imu_dropped.total() + input.scans_out_of_order + input.scans_stamp_jumps + input.skipped_messages +
                  input.queue_dropped_imu + input.queue_dropped_scans >
              0 ||
-         input.truncated || !input.time_base_jumps.empty();
+         input.truncated || input.damaged_chunks > 0 || !input.time_base_jumps.empty();
 }
 
 Json toJson(const RunReport& r) {
@@ -95,6 +95,7 @@ Json toJson(const RunReport& r) {
   in["imu_acc_scale"] = r.input.imu_acc_scale;
   in["skipped_messages"] = r.input.skipped_messages;
   in["truncated"] = r.input.truncated;
+  in["damaged_chunks"] = r.input.damaged_chunks;
   in["imu_dropped"] = {{"non_finite", r.input.imu_dropped.non_finite},
                        {"beyond_range", r.input.imu_dropped.out_of_range},
                        {"out_of_order", r.input.imu_dropped.out_of_order},

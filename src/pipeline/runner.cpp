@@ -110,6 +110,7 @@ RunResult runBag(const RunOptions& options) {
   input.imu_acc_scale = source.accScale();
   input.skipped_messages = source.skippedMessages();
   input.truncated = source.truncated();
+  input.damaged_chunks = source.damagedChunks();
   input.decoded = source.stats();
   if (input.imu_dropped.total() > 0)
     log::warn("IMU: ", input.imu_dropped.total(), " samples dropped (non-finite ", input.imu_dropped.non_finite,
@@ -128,7 +129,10 @@ RunResult runBag(const RunOptions& options) {
   // Trust: the stream after initialisation is covered by poses, and few of them were degraded.
   const Trajectory& poses = system.odometryTrajectory();
   if (!poses.empty()) {
-    const double span_s = toSec(odometry.lastImuNs() - poses.front().stamp_ns);
+    // To the bag's end (its last message, whatever was readable), not just to the last IMU sample read.
+    const Stamp end_ns =
+        options.replays > 1 ? odometry.lastImuNs() : std::max(odometry.lastImuNs(), std::min(source.endNs(), stop_ns));
+    const double span_s = toSec(end_ns - poses.front().stamp_ns);
     report.sweeps.coverage = span_s > 0 ? toSec(poses.back().stamp_ns - poses.front().stamp_ns) / span_s : 1.0;
     report.sweeps.degraded_fraction =
         static_cast<double>(report.sweeps.degraded) / static_cast<double>(std::max<std::size_t>(poses.size(), 1));

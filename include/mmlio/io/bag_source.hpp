@@ -65,6 +65,7 @@ class BagSource {
   std::size_t imuCount() const;    // IMU samples delivered so far
   std::size_t skippedMessages() const;  // messages that failed to deserialise
   bool truncated() const;          // unindexed/truncated bag read from its chunks, or a read error ended the stream
+  std::size_t damagedChunks() const;  // damaged stretches skipped: reading went on at the next intact chunk
 
  private:
   struct Impl;

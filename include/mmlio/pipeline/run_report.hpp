@@ -31,6 +31,7 @@ struct RunReport {
     std::size_t scans_out_of_order = 0, scans_stamp_jumps = 0;
     std::size_t queue_dropped_imu = 0, queue_dropped_scans = 0;  // live: processing queue full
     bool truncated = false;
+    std::size_t damaged_chunks = 0;     // damaged stretches of the bag skipped
     struct TimeBaseJump {
       double at_s = 0.0, shift_s = 0.0;  // input stamp where it happened; stamps shifted back by
     };
