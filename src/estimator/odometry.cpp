@@ -414,7 +414,8 @@ SweepResult Odometry::process(const lidar::AlignedSweep& sweep) {
     d.last.stamp_ns = sweep.start_ns;
     d.last.q_world_body = d.init_result.q_world_imu;
     d.last.bias.gyro_rad_s = d.init_result.gyro_bias;
-    log::emit(log::Level::kInfo, "IMU initialised: ", d.init_result.message);
+    log::emit(d.init_result.forced ? log::Level::kWarn : log::Level::kInfo, "IMU initialised: ", d.init_result.message,
+              d.init_result.forced ? " (no standstill: gyro bias starts at 0, roll/pitch from the mean acceleration)" : "");
   }
 
   // ---- IMU prediction over the sweep, motion for de-skew ----

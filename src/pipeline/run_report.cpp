@@ -115,6 +115,7 @@ Json toJson(const RunReport& r) {
   in["decoded"] = decoded;
 
   rep["imu_init"] = {{"ok", r.imu_init.ok},
+                     {"forced", r.imu_init.forced},
                      {"gravity_norm_m_s2", r.imu_init.gravity_norm_m_s2},
                      {"gyro_bias_rad_s", vec3(r.imu_init.gyro_bias)},
                      {"acc_scale", r.input.imu_acc_scale},

@@ -19,7 +19,10 @@ struct ImuInitConfig {
   double max_gyro_bias_rad_s = 0.1;
   // |mean acc| must look like gravity in m/s^2 (9.81) or in g (1.0), within this fraction.
   double max_gravity_norm_error = 0.1;
-  double force_after_s = 6.0;         // never still for this long: initialise anyway (logged)
+  // Never still for this long: initialise anyway (a warning; report imu_init.forced). Each second
+  // waited is a second without poses for a bag that starts in motion; a rig that starts still is
+  // found still within duration_s.
+  double force_after_s = 2.0;
 };
 
 struct ImuInitResult {
