@@ -1,5 +1,7 @@
 #include "bag_open.hpp"
 
+#include "raw_bag_scanner.hpp"
+
 #include <rosbag/exceptions.h>
 #include <rosbag/view.h>
 
@@ -39,7 +41,7 @@ bool tryOpenIndexed(rosbag::Bag& bag, const std::string& path, std::string* why)
   checkFile(path);
   try {
     bag.open(path, rosbag::bagmode::Read);
-    return true;
+    if (indexLooksSound(path, why)) return true;
   } catch (const rosbag::BagUnindexedException&) {
     *why = "no index";
   } catch (const std::exception& e) {

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <set>
 
 #include "mmlio/core/error.hpp"
 
@@ -120,6 +121,76 @@ std::uint64_t nextChunkAfter(std::ifstream& in, std::uint64_t from, std::uint64_
 
 }  // namespace
 
+bool indexLooksSound(const std::string& path, std::string* why) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return true;  // the indexed open reports it
+  in.seekg(0, std::ios::end);
+  const std::uint64_t file_size = static_cast<std::uint64_t>(in.tellg());
+  constexpr std::uint8_t kOpIndexData = 0x04, kOpChunkInfo = 0x06;
+  std::set<std::uint64_t> chunk_positions;
+  std::set<std::uint32_t> record_starts;  // of the chunk the index records follow
+  std::uint32_t chunk_size = 0;
+  const auto fail = [&](const std::string& what) {
+    *why = what;
+    return false;
+  };
+  for (std::uint64_t pos = 13; pos + 4 <= file_size;) {
+    Record r;
+    if (!readRecord(in, pos, file_size, &r)) return true;  // damage here is the readers' business
+    if (r.data_pos + r.data_len > file_size) return true;
+    const std::uint8_t kind = op(r.fields);
+    if (kind == kOpChunk) {
+      chunk_positions.insert(pos);
+      chunk_size = fieldU32(r.fields, "size");
+      // Where its records start, walked with bounds checks: the index may only point there (rosbag
+      // trusts each record's lengths and reads past its buffer on damaged ones).
+      record_starts.clear();
+      RawChunk c;
+      c.data_offset = r.data_pos;
+      c.data_size = r.data_len;
+      c.compression = r.fields.count("compression") ? r.fields.at("compression") : "none";
+      c.uncompressed_size = chunk_size;
+      std::vector<std::uint8_t> payload;
+      try {
+        payload = readChunkPayload(in, c, path);
+      } catch (const Error& e) {
+        return fail(e.what());
+      }
+      const std::uint8_t* p = payload.data();
+      const std::size_t n = payload.size();
+      for (std::size_t i = 0; i + 4 <= n;) {
+        const std::uint32_t hl = u32(p + i);
+        if (hl > n - i - 4 || i + 4 + hl + 4 > n) break;
+        Fields f;
+        if (!parseFields(p + i + 4, hl, &f)) break;
+        const std::uint32_t dl = u32(p + i + 4 + hl);
+        if (dl > n - (i + 4 + hl + 4)) break;
+        record_starts.insert(static_cast<std::uint32_t>(i));
+        i += 4 + hl + 4 + dl;
+      }
+    } else if (kind == kOpIndexData) {
+      const std::uint32_t count = fieldU32(r.fields, "count");
+      if (fieldU32(r.fields, "ver") != 1 || static_cast<std::uint64_t>(count) * 12 != r.data_len)
+        return fail("damaged index record at byte " + std::to_string(pos));
+      std::vector<std::uint8_t> entries(r.data_len);
+      in.clear();
+      in.seekg(static_cast<std::streamoff>(r.data_pos));
+      if (!in.read(reinterpret_cast<char*>(entries.data()), static_cast<std::streamsize>(entries.size()))) return true;
+      for (std::uint32_t k = 0; k < count; ++k)
+        if (!record_starts.count(u32(&entries[12 * k + 8])))
+          return fail("index entry points at no intact record of its chunk (byte " + std::to_string(pos) + ")");
+    } else if (kind == kOpChunkInfo) {
+      const auto it = r.fields.find("chunk_pos");
+      std::uint64_t chunk_pos = 0;
+      if (it == r.fields.end() || it->second.size() != 8) return fail("damaged chunk info at byte " + std::to_string(pos));
+      std::memcpy(&chunk_pos, it->second.data(), 8);
+      if (!chunk_positions.count(chunk_pos)) return fail("chunk info names no chunk (byte " + std::to_string(pos) + ")");
+    }
+    pos = r.data_pos + r.data_len;
+  }
+  return true;
+}
+
 RawBagScanner::RawBagScanner(const std::string& path) : path_(path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error("cannot read bag " + path);
@@ -160,7 +231,12 @@ RawBagScanner::RawBagScanner(const std::string& path) : path_(path) {
 
 std::vector<std::uint8_t> RawBagScanner::chunkPayload(const RawChunk& c) const {
   std::ifstream in(path_, std::ios::binary);
+  return readChunkPayload(in, c, path_);
+}
+
+std::vector<std::uint8_t> readChunkPayload(std::ifstream& in, const RawChunk& c, const std::string& path_) {
   std::vector<std::uint8_t> raw(c.data_size);
+  in.clear();
   in.seekg(static_cast<std::streamoff>(c.data_offset));
   if (!in.read(reinterpret_cast<char*>(raw.data()), static_cast<std::streamsize>(raw.size())))
     throw Error("cannot read a chunk of " + path_);

@@ -4,6 +4,7 @@
 // can still be streamed: up to its last complete message, and past a damaged stretch from the next
 // intact chunk on. Uncompressed, lz4 and bz2 chunks (a cut compressed chunk is lost).
 #include <cstdint>
+#include <fstream>
 #include <map>
 #include <string>
 #include <vector>
@@ -30,6 +31,15 @@ struct RawChunk {
   Stamp begin_ns = 0, end_ns = 0;
   std::size_t messages = 0;
 };
+
+/// Checks that the bag's index matches its chunks (every index entry at an intact record of its
+/// chunk, every chunk info naming a chunk): rosbag trusts its index and each record's lengths and
+/// reads out of bounds (crashes) where they are damaged. Reads every chunk once. False with the
+/// reason otherwise.
+bool indexLooksSound(const std::string& path, std::string* why);
+
+/// The (decompressed) payload of chunk c. Throws mmlio::Error naming `path`.
+std::vector<std::uint8_t> readChunkPayload(std::ifstream& in, const RawChunk& c, const std::string& path);
 
 class RawBagScanner {
  public:
