@@ -7,37 +7,78 @@
 #include <cstdint>
 #include <utility>
 
+#include "mmlio/core/voxel_key.hpp"
+
 namespace mmlio::map {
+
+namespace {
+
+std::uint64_t pack(int x, int y, int z) { return packVoxelKey(x, y, z); }
+
+// splitmix64 finaliser: neighbouring voxels land in unrelated slots.
+std::size_t slotHash(std::uint64_t h) {
+  h ^= h >> 30;
+  h *= 0xbf58476d1ce4e5b9ULL;
+  h ^= h >> 27;
+  h *= 0x94d049bb133111ebULL;
+  h ^= h >> 31;
+  return static_cast<std::size_t>(h);
+}
+
+}  // namespace
 
 VoxelHashMap::VoxelHashMap(double voxel_m, int max_points_per_voxel)
     : voxel_m_(voxel_m > 0 ? voxel_m : 1.0),
       inv_voxel_(1.0 / voxel_m_),
-      max_points_per_voxel_(std::max(1, max_points_per_voxel)) {}
+      max_points_per_voxel_(std::max(1, max_points_per_voxel)),
+      slots_(1024, kNone) {}
 
 VoxelHashMap::Key VoxelHashMap::keyOf(const Eigen::Vector3d& p) const {
   return Key{static_cast<int>(std::floor(p.x() * inv_voxel_)), static_cast<int>(std::floor(p.y() * inv_voxel_)),
              static_cast<int>(std::floor(p.z() * inv_voxel_))};
 }
 
-void VoxelHashMap::markOccupied(const Key& k) {
-  const std::size_t bit = KeyHash()(k) & (kOccupancyBits - 1);
-  occupancy_[bit >> 6] |= std::uint64_t{1} << (bit & 63);
+std::uint32_t VoxelHashMap::find(std::uint64_t key) const {
+  const std::size_t mask = slots_.size() - 1;
+  for (std::size_t i = slotHash(key) & mask;; i = (i + 1) & mask) {
+    const std::uint32_t v = slots_[i];
+    if (v == kNone || voxels_[v].key == key) return v;
+  }
 }
 
-bool VoxelHashMap::maybeOccupied(const Key& k) const {
-  const std::size_t bit = KeyHash()(k) & (kOccupancyBits - 1);
-  return (occupancy_[bit >> 6] >> (bit & 63)) & 1u;
+void VoxelHashMap::insertSlot(std::uint64_t key, std::uint32_t voxel) {
+  const std::size_t mask = slots_.size() - 1;
+  std::size_t i = slotHash(key) & mask;
+  while (slots_[i] != kNone) i = (i + 1) & mask;
+  slots_[i] = voxel;
+}
+
+void VoxelHashMap::rebuildIndex() {
+  voxels_.erase(std::remove_if(voxels_.begin(), voxels_.end(), [](const Voxel& v) { return v.points.empty(); }),
+                voxels_.end());
+  std::size_t size = 1024;
+  while (size < 2 * voxels_.size() + 2) size *= 2;
+  slots_.assign(size, kNone);
+  for (std::size_t v = 0; v < voxels_.size(); ++v) insertSlot(voxels_[v].key, static_cast<std::uint32_t>(v));
 }
 
 void VoxelHashMap::add(const std::vector<Eigen::Vector3d>& world_points) {
   for (const auto& p : world_points) {
     if (!p.allFinite()) continue;
-    const Key key = keyOf(p);
-    auto& bucket = voxels_[key];
-    if (bucket.empty()) {
-      bucket.reserve(static_cast<std::size_t>(max_points_per_voxel_));
-      markOccupied(key);
+    const Key k = keyOf(p);
+    const std::uint64_t key = pack(k.x, k.y, k.z);
+    std::uint32_t v = find(key);
+    if (v == kNone) {
+      if (2 * (voxels_.size() + 1) > slots_.size()) {
+        slots_.assign(slots_.size() * 2, kNone);
+        for (std::size_t i = 0; i < voxels_.size(); ++i) insertSlot(voxels_[i].key, static_cast<std::uint32_t>(i));
+      }
+      v = static_cast<std::uint32_t>(voxels_.size());
+      voxels_.push_back({key, {}});
+      voxels_.back().points.reserve(static_cast<std::size_t>(max_points_per_voxel_));
+      insertSlot(key, v);
     }
+    auto& bucket = voxels_[v].points;
     if (static_cast<int>(bucket.size()) >= max_points_per_voxel_) continue;
     bucket.push_back(p);
     ++num_points_;
@@ -46,16 +87,15 @@ void VoxelHashMap::add(const std::vector<Eigen::Vector3d>& world_points) {
 
 void VoxelHashMap::removeFarFrom(const Eigen::Vector3d& center, double radius_m) {
   const double r2 = radius_m * radius_m;
-  for (auto it = voxels_.begin(); it != voxels_.end();) {
-    if (it->second.empty() || (it->second.front() - center).squaredNorm() > r2) {
-      num_points_ -= it->second.size();
-      it = voxels_.erase(it);
-    } else {
-      ++it;
-    }
+  bool removed = false;
+  for (Voxel& v : voxels_) {
+    if (!v.points.empty() && (v.points.front() - center).squaredNorm() <= r2) continue;
+    num_points_ -= v.points.size();
+    v.points.clear();
+    v.points.shrink_to_fit();
+    removed = true;
   }
-  std::fill(occupancy_.begin(), occupancy_.end(), 0);
-  for (const auto& [key, bucket] : voxels_) markOccupied(key);
+  if (removed) rebuildIndex();
 }
 
 std::size_t VoxelHashMap::removeIf(const Eigen::Vector3d& center, double radius_m,
@@ -63,8 +103,8 @@ std::size_t VoxelHashMap::removeIf(const Eigen::Vector3d& center, double radius_
                                   std::vector<Eigen::Vector3d>* removed_points) {
   const double reach = radius_m + std::sqrt(3.0) * voxel_m_;
   std::vector<std::vector<Eigen::Vector3d>*> near;
-  for (auto& [key, bucket] : voxels_)
-    if (!bucket.empty() && (bucket.front() - center).squaredNorm() <= reach * reach) near.push_back(&bucket);
+  for (Voxel& v : voxels_)
+    if (!v.points.empty() && (v.points.front() - center).squaredNorm() <= reach * reach) near.push_back(&v.points);
   std::vector<std::vector<Eigen::Vector3d>> removed(near.size());
   const double r2 = radius_m * radius_m;
   tbb::parallel_for(std::size_t(0), near.size(), [&](std::size_t i) {
@@ -83,19 +123,7 @@ std::size_t VoxelHashMap::removeIf(const Eigen::Vector3d& center, double radius_
   }
   if (total == 0) return 0;
   num_points_ -= total;
-  bool erased = false;
-  for (auto it = voxels_.begin(); it != voxels_.end();) {
-    if (it->second.empty()) {
-      it = voxels_.erase(it);
-      erased = true;
-    } else {
-      ++it;
-    }
-  }
-  if (erased) {
-    std::fill(occupancy_.begin(), occupancy_.end(), 0);
-    for (const auto& [key, bucket] : voxels_) markOccupied(key);
-  }
+  rebuildIndex();
   return total;
 }
 
@@ -111,11 +139,8 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
   best.clear();
   best.reserve(static_cast<std::size_t>(k) + 1);
   const auto cmp = [](const auto& a, const auto& b) { return a.first < b.first; };
-  const auto visit = [&](const Key& key) {
-    if (!maybeOccupied(key)) return;
-    const auto it = voxels_.find(key);
-    if (it == voxels_.end()) return;
-    for (const auto& p : it->second) {
+  const auto visit = [&](const std::vector<Eigen::Vector3d>& points) {
+    for (const auto& p : points) {
       const double d2 = (p - q).squaredNorm();
       if (d2 > max_d2) continue;
       if (static_cast<int>(best.size()) < k) {
@@ -133,7 +158,7 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
   const double cube = std::pow(2.0 * rings + 1.0, 3);
   if (cube > 4.0 * static_cast<double>(voxels_.size())) {
     // The search cube holds more cells than the map has voxels: scanning the map is cheaper.
-    for (const auto& [key, bucket] : voxels_) visit(key);
+    for (const Voxel& v : voxels_) visit(v.points);
   } else {
     const int max_ring = std::max(1, static_cast<int>(rings));
     // Squared distance from q to the voxel `offset` cells from q's own along one axis.
@@ -154,7 +179,8 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
             // max_dist_m) is not looked up: the hash lookups are most of the cost of a query.
             const double gap2 = gxy + axisGap(q.z(), c.z, dz);
             if (gap2 > max_d2 || (static_cast<int>(best.size()) == k && gap2 >= best.front().first)) continue;
-            visit(Key{c.x + dx, c.y + dy, c.z + dz});
+            const std::uint32_t v = find(pack(c.x + dx, c.y + dy, c.z + dz));
+            if (v != kNone) visit(voxels_[v].points);
           }
         }
       }
@@ -172,14 +198,14 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
 
 void VoxelHashMap::clear() {
   voxels_.clear();
-  std::fill(occupancy_.begin(), occupancy_.end(), 0);
+  slots_.assign(1024, kNone);
   num_points_ = 0;
 }
 
 std::vector<Eigen::Vector3d> VoxelHashMap::points() const {
   std::vector<Eigen::Vector3d> all;
   all.reserve(num_points_);
-  for (const auto& [key, bucket] : voxels_) all.insert(all.end(), bucket.begin(), bucket.end());
+  for (const Voxel& v : voxels_) all.insert(all.end(), v.points.begin(), v.points.end());
   return all;
 }
 

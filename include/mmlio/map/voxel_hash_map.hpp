@@ -6,7 +6,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
-#include <unordered_map>
 #include <vector>
 
 namespace mmlio::map {
@@ -41,36 +40,26 @@ class VoxelHashMap {
  private:
   struct Key {
     int x, y, z;
-    bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
-  };
-  struct KeyHash {
-    // 21 bits per axis packed, then a splitmix64 finaliser: neighbouring voxels land in unrelated
-    // buckets (the classic xor-of-primes hash clusters them and lengthens the bucket chains).
-    std::size_t operator()(const Key& k) const {
-      std::uint64_t h = ((static_cast<std::uint64_t>(k.x) & 0x1FFFFF) << 42) |
-                        ((static_cast<std::uint64_t>(k.y) & 0x1FFFFF) << 21) | (static_cast<std::uint64_t>(k.z) & 0x1FFFFF);
-      h ^= h >> 30;
-      h *= 0xbf58476d1ce4e5b9ULL;
-      h ^= h >> 27;
-      h *= 0x94d049bb133111ebULL;
-      h ^= h >> 31;
-      return static_cast<std::size_t>(h);
-    }
   };
   Key keyOf(const Eigen::Vector3d& p) const;
+  // Open addressing over packed keys (linear probing, load <= 1/2): a kNN query looks up to 125
+  // voxels, most of them empty where features are far and sparse, and std::unordered_map's node
+  // chasing was most of the query's cost. Voxels live in `voxels_` in insertion order.
+  struct Voxel {
+    std::uint64_t key;
+    std::vector<Eigen::Vector3d> points;
+  };
+  static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+  std::uint32_t find(std::uint64_t key) const;
+  void insertSlot(std::uint64_t key, std::uint32_t voxel);
+  void rebuildIndex();  // after voxels were removed (compacts them)
 
   double voxel_m_;
   double inv_voxel_;
   int max_points_per_voxel_;
   std::size_t num_points_ = 0;
-  std::unordered_map<Key, std::vector<Eigen::Vector3d>, KeyHash> voxels_;
-  // One bit per hash slot, set when a voxel with that hash exists (rebuilt on removal): a clear
-  // bit proves a voxel empty without the hash-table lookup, which is most of a kNN query's cost
-  // where the map is sparse (far features in a large hall scan up to 125 voxels, mostly empty).
-  static constexpr std::size_t kOccupancyBits = std::size_t{1} << 20;
-  std::vector<std::uint64_t> occupancy_ = std::vector<std::uint64_t>(kOccupancyBits / 64, 0);
-  void markOccupied(const Key& k);
-  bool maybeOccupied(const Key& k) const;
+  std::vector<Voxel> voxels_;
+  std::vector<std::uint32_t> slots_;  // voxel index or kNone; size a power of two
 };
 
 }  // namespace mmlio::map
