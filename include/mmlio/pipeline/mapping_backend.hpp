@@ -43,7 +43,7 @@ class MappingBackend {
   Eigen::Isometry3d correction() const;
   /// The map at the corrected poses. With clean_map it no longer holds the points that nearby
   /// keyframes (ghost_keyframes before and after the one that stored them) saw through at least
-  /// twice and more often than they saw them: something stood there and left. A surface seen once
+  /// twice and in at least a third of the views that decided: something stood there and left. A surface seen once
   /// is never removed: only rays that pass it can. Each submap is judged once, on the back end's
   /// thread, as soon as the keyframes after it exist (all of them by finish()).
   std::vector<Point> map() const;
