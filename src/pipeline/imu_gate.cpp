@@ -6,6 +6,9 @@ namespace mmlio::pipeline {
 
 bool ImuGate::accept(const ImuSample& s) {
   const auto drop = [&](std::size_t* count, const char* why) {
+    const Stamp at = last_ns_ != std::numeric_limits<Stamp>::min() ? last_ns_ : s.stamp_ns;
+    if (counts_.total() == 0) counts_.first_at_ns = at;
+    counts_.last_at_ns = at;
     if ((*count)++ == 0)
       log::warn("IMU sample at ", toSec(s.stamp_ns), " s dropped: ", why, " (further ones are counted in the report)");
     return false;

@@ -79,10 +79,13 @@ void OnlinePipeline::addScan(LidarScan scan) {
   const auto it = offset_s_.find(scan.sensor);
   if (it == offset_s_.end()) return;
   scan.start_ns += fromSec(it->second) - shift_ns_;  // t_imu = t_stamp + offset
+  const auto last = last_scan_ns_.find(scan.sensor);
   const auto drop = [&](std::size_t* count, const std::string& why) {
+    const Stamp at = last != last_scan_ns_.end() ? last->second : scan.start_ns;
+    if (scan_drops_.out_of_order + scan_drops_.jumped == 0) scan_drops_.first_at_ns = at;
+    scan_drops_.last_at_ns = at;
     if ((*count)++ == 0) log::warn(scan.sensor, " scan dropped: ", why, " (further ones are counted in the report)");
   };
-  const auto last = last_scan_ns_.find(scan.sensor);
   if (last != last_scan_ns_.end()) {
     if (scan.start_ns <= last->second) return drop(&scan_drops_.out_of_order, "not after the previous scan of this LiDAR");
     if (scan.start_ns - last->second > fromSec(kMaxScanJumpS)) {

@@ -96,11 +96,17 @@ Json toJson(const RunReport& r) {
   in["skipped_messages"] = r.input.skipped_messages;
   in["truncated"] = r.input.truncated;
   in["damaged_chunks"] = r.input.damaged_chunks;
+  // Where drops happened: stream seconds (the last accepted stamp) of the first and the last one.
+  const auto span = [](Stamp from, Stamp to) { return Json::array({toSec(from), toSec(to)}); };
   in["imu_dropped"] = {{"non_finite", r.input.imu_dropped.non_finite},
                        {"beyond_range", r.input.imu_dropped.out_of_range},
                        {"out_of_order", r.input.imu_dropped.out_of_order},
                        {"stamp_jumps", r.input.imu_dropped.jumped}};
+  if (r.input.imu_dropped.total() > 0)
+    in["imu_dropped"]["between_s"] = span(r.input.imu_dropped.first_at_ns, r.input.imu_dropped.last_at_ns);
   in["scans_dropped"] = {{"out_of_order", r.input.scans_out_of_order}, {"stamp_jumps", r.input.scans_stamp_jumps}};
+  if (r.input.scans_out_of_order + r.input.scans_stamp_jumps > 0)
+    in["scans_dropped"]["between_s"] = span(r.input.scans_dropped_from_ns, r.input.scans_dropped_to_ns);
   Json jumps = Json::array();
   for (const auto& j : r.input.time_base_jumps) jumps.push_back({{"at_s", j.at_s}, {"shift_s", j.shift_s}});
   in["time_base_jumps"] = jumps;

@@ -89,6 +89,8 @@ RunReport System::report() const {
   r.input.imu_dropped = online_.imuGate().counts();
   r.input.scans_out_of_order = online_.scanDrops().out_of_order;
   r.input.scans_stamp_jumps = online_.scanDrops().jumped;
+  r.input.scans_dropped_from_ns = online_.scanDrops().first_at_ns;
+  r.input.scans_dropped_to_ns = online_.scanDrops().last_at_ns;
   for (const OnlinePipeline::TimeBaseJump& j : online_.timeBaseJumps())
     r.input.time_base_jumps.push_back({toSec(j.at_ns), toSec(j.shift_ns)});
   r.imu_init = odometry().imuInit();

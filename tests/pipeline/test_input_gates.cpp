@@ -72,6 +72,9 @@ TEST(ImuGate, DropsAndCountsNonFiniteImpossibleAndDisorderedSamples) {
   EXPECT_EQ(gate.counts().out_of_range, 1u);
   EXPECT_EQ(gate.counts().out_of_order, 2u);
   EXPECT_EQ(gate.counts().jumped, 1u);
+  // Where in the stream: the last accepted stamp at the first and the last drop.
+  EXPECT_EQ(gate.counts().first_at_ns, at(0.000).stamp_ns);
+  EXPECT_EQ(gate.counts().last_at_ns, at(0.015).stamp_ns);
 }
 
 TEST(ImuGate, AStreamThatStaysAfterAGapIsAcceptedAgainAfterAFewSamples) {

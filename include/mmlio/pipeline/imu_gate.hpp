@@ -22,6 +22,9 @@ class ImuGate {
   };
   struct Counts {
     std::size_t non_finite = 0, out_of_range = 0, out_of_order = 0, jumped = 0;
+    // Where in the stream drops happened: the last accepted stamp at the first and the last drop
+    // (a dropped sample's own stamp may be the garbage that got it dropped).
+    Stamp first_at_ns = 0, last_at_ns = 0;
     std::size_t total() const { return non_finite + out_of_range + out_of_order + jumped; }
   };
 

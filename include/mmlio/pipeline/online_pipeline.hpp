@@ -36,6 +36,7 @@ class OnlinePipeline {
   /// back; a LiDAR that resumes after a real gap is accepted again after three scans).
   struct ScanDrops {
     std::size_t out_of_order = 0, jumped = 0;
+    Stamp first_at_ns = 0, last_at_ns = 0;  // the LiDAR's last accepted scan at the first and last drop
   };
   const ScanDrops& scanDrops() const { return scan_drops_; }
   std::size_t sweepsProcessed() const { return processed_; }

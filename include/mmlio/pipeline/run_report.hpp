@@ -29,6 +29,7 @@ struct RunReport {
     std::size_t skipped_messages = 0;   // failed to deserialise
     ImuGate::Counts imu_dropped;
     std::size_t scans_out_of_order = 0, scans_stamp_jumps = 0;
+    Stamp scans_dropped_from_ns = 0, scans_dropped_to_ns = 0;  // stream position of the first / last drop
     std::size_t queue_dropped_imu = 0, queue_dropped_scans = 0;  // live: processing queue full
     bool truncated = false;
     std::size_t damaged_chunks = 0;     // damaged stretches of the bag skipped
