@@ -460,6 +460,33 @@ SweepResult Odometry::process(const lidar::AlignedSweep& sweep) {
     predicted.q_world_body = (prev.q_world_body * so3::exp(d.omega_body * dt)).normalized();
     motion = lidar::SweepMotion::constantTwist(prev.q_world_body.inverse() * prev.v_world, d.omega_body,
                                                toSec(sweep.end_ns - sweep.start_ns));
+    // The IMU may be back within this sweep (a gap of all data just ended): its gyroscope then
+    // de-skews the sweep instead of the turn rate from before the gap (a walker who stopped turning
+    // during the gap would be de-skewed by a turn that did not happen).
+    const std::vector<ImuSample> within = imu::imuBetween(d.imuBuffer(), sweep.start_ns, sweep.end_ns);
+    Stamp within_gap = 0;
+    for (std::size_t k = 1; k < within.size(); ++k)
+      within_gap = std::max(within_gap, within[k].stamp_ns - within[k - 1].stamp_ns);
+    if (within.size() >= 2 && within.front().stamp_ns <= sweep.start_ns + fromSec(0.005) &&
+        within.back().stamp_ns >= sweep.end_ns - fromSec(0.005) && within_gap <= kMaxImuGapNs) {
+      NavState start = prev;
+      start.stamp_ns = sweep.start_ns;
+      start.p_world = prev.p_world + prev.v_world * toSec(sweep.start_ns - prev.stamp_ns);
+      start.q_world_body = (prev.q_world_body * so3::exp(d.omega_body * toSec(sweep.start_ns - prev.stamp_ns))).normalized();
+      std::vector<Stamp> query;
+      for (int k = 0; k <= 10; ++k) query.push_back(sweep.start_ns + (sweep.end_ns - sweep.start_ns) * k / 10);
+      const std::vector<NavState> states = imu::propagate(start, within, query, d.g_world);
+      const Eigen::Isometry3d T_end_inv = states.back().pose().inverse();
+      std::vector<double> times;
+      std::vector<Eigen::Isometry3d> poses;
+      for (std::size_t k = 0; k < states.size(); ++k) {
+        times.push_back(toSec(query[k] - sweep.start_ns));
+        poses.push_back(T_end_inv * states[k].pose());
+      }
+      motion = lidar::SweepMotion(times, poses);
+      predicted.q_world_body = states.back().q_world_body;
+      predicted.p_world = states.back().p_world;
+    }
     out.note = "no IMU over the sweep: constant-velocity prediction, LiDAR-only registration";
     // The keyframe preintegration now misses an interval: restart the window (the map stays).
     d.window.clear();
