@@ -28,6 +28,26 @@ namespace mmlio::estimator {
 namespace {
 
 constexpr std::size_t kMinCorrespondences = 30;
+
+/// The de-skew motion of a sweep: `start` propagated through the IMU `samples` to 11 times from
+/// max(from, sweep start) to the sweep end, as poses relative to the end pose; the end state into
+/// *end if given.
+lidar::SweepMotion imuMotion(const NavState& start, const std::vector<ImuSample>& samples, Stamp from,
+                             const lidar::AlignedSweep& sweep, const Eigen::Vector3d& g_world, NavState* end = nullptr) {
+  std::vector<Stamp> query;
+  const int n = 10;
+  for (int k = 0; k <= n; ++k) query.push_back(std::max(from, sweep.start_ns + (sweep.end_ns - sweep.start_ns) * k / n));
+  const std::vector<NavState> states = imu::propagate(start, samples, query, g_world);
+  const Eigen::Isometry3d T_end_inv = states.back().pose().inverse();
+  std::vector<double> times;
+  std::vector<Eigen::Isometry3d> poses;
+  for (std::size_t k = 0; k < states.size(); ++k) {
+    times.push_back(toSec(query[k] - sweep.start_ns));
+    poses.push_back(T_end_inv * states[k].pose());
+  }
+  if (end) *end = states.back();
+  return lidar::SweepMotion(times, poses);
+}
 constexpr Stamp kMaxImuGapNs = 50000000;  // 50 ms: ten samples of a 200 Hz IMU
 constexpr double kGuessedVelocitySigma = 1.0;  // m/s: a velocity guessed across a gap (walking, driving slowly)
 // Re-associate after a registration round only if the pose moved more than a tenth of the plane
@@ -440,18 +460,7 @@ SweepResult Odometry::process(const lidar::AlignedSweep& sweep) {
     integrateSamples(*d.pre_since_keyframe, samples);
     predicted = pre->predict(prev, d.g_world);
     predicted.stamp_ns = sweep.end_ns;
-    std::vector<Stamp> query;
-    const int n = 10;
-    for (int k = 0; k <= n; ++k) query.push_back(std::max(t0, sweep.start_ns + (sweep.end_ns - sweep.start_ns) * k / n));
-    const std::vector<NavState> states = imu::propagate(prev, samples, query, d.g_world);
-    const Eigen::Isometry3d T_end_inv = states.back().pose().inverse();
-    std::vector<double> times;
-    std::vector<Eigen::Isometry3d> poses;
-    for (std::size_t k = 0; k < states.size(); ++k) {
-      times.push_back(toSec(query[k] - sweep.start_ns));
-      poses.push_back(T_end_inv * states[k].pose());
-    }
-    motion = lidar::SweepMotion(times, poses);
+    motion = imuMotion(prev, samples, t0, sweep, d.g_world);
   } else {
     // No IMU across this sweep (gap or IMU stopped): the last motion goes on (velocity and turn
     // rate), for the prediction and the de-skew, logged.
@@ -473,19 +482,10 @@ SweepResult Odometry::process(const lidar::AlignedSweep& sweep) {
       start.stamp_ns = sweep.start_ns;
       start.p_world = prev.p_world + prev.v_world * toSec(sweep.start_ns - prev.stamp_ns);
       start.q_world_body = (prev.q_world_body * so3::exp(d.omega_body * toSec(sweep.start_ns - prev.stamp_ns))).normalized();
-      std::vector<Stamp> query;
-      for (int k = 0; k <= 10; ++k) query.push_back(sweep.start_ns + (sweep.end_ns - sweep.start_ns) * k / 10);
-      const std::vector<NavState> states = imu::propagate(start, within, query, d.g_world);
-      const Eigen::Isometry3d T_end_inv = states.back().pose().inverse();
-      std::vector<double> times;
-      std::vector<Eigen::Isometry3d> poses;
-      for (std::size_t k = 0; k < states.size(); ++k) {
-        times.push_back(toSec(query[k] - sweep.start_ns));
-        poses.push_back(T_end_inv * states[k].pose());
-      }
-      motion = lidar::SweepMotion(times, poses);
-      predicted.q_world_body = states.back().q_world_body;
-      predicted.p_world = states.back().p_world;
+      NavState end;
+      motion = imuMotion(start, within, sweep.start_ns, sweep, d.g_world, &end);
+      predicted.q_world_body = end.q_world_body;
+      predicted.p_world = end.p_world;
     }
     out.note = "no IMU over the sweep: constant-velocity prediction, LiDAR-only registration";
     // The keyframe preintegration now misses an interval: restart the window (the map stays).
