@@ -18,16 +18,13 @@ bool ImuGate::accept(const ImuSample& s) {
     return drop(&counts_.out_of_range, "beyond any IMU's range (50 g, 50 rad/s)");
   if (last_ns_ != std::numeric_limits<Stamp>::min()) {
     if (s.stamp_ns <= last_ns_) return drop(&counts_.out_of_order, "stamp not after the previous sample");
-    if (s.stamp_ns - last_ns_ > fromSec(cfg_.max_jump_s)) {
+    if (jump_.jumped(last_ns_, s.stamp_ns)) {
       // A lone stamp far ahead is corrupt; a stream that stays there had a real gap.
-      const bool continues = jump_run_ > 0 && s.stamp_ns > jump_ns_ && s.stamp_ns - jump_ns_ < fromSec(cfg_.max_jump_s);
-      jump_run_ = continues ? jump_run_ + 1 : 1;
-      jump_ns_ = s.stamp_ns;
-      if (jump_run_ < cfg_.jump_confirmations) return drop(&counts_.jumped, "stamp jumps far ahead of the stream");
+      if (jump_.holdBack(last_ns_, s.stamp_ns)) return drop(&counts_.jumped, "stamp jumps far ahead of the stream");
       log::warn("IMU stream resumed ", toSec(s.stamp_ns - last_ns_), " s after the last accepted sample");
     }
   }
-  jump_run_ = 0;
+  jump_.accepted();
   last_ns_ = s.stamp_ns;
   return true;
 }

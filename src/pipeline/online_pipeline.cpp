@@ -12,7 +12,8 @@ namespace mmlio::pipeline {
 namespace {
 
 constexpr double kMaxScanJumpS = 2.0;       // a scan further after its LiDAR's previous one ...
-constexpr int kScanJumpConfirmations = 3;   // ... is dropped unless this many in a row agree
+constexpr int kScanJumpConfirmations = 3;   // ... is dropped unless this many in a row agree,
+constexpr double kScanRunSpacingS = 1.0;    // ... each within this of the one before
 constexpr double kTimeBaseJumpS = 1.0;      // the IMU resuming this much later, every LiDAR alike ...
 constexpr double kTimeBaseAgreementS = 0.3; // ... within this: the stream's time base jumped
 
@@ -41,7 +42,7 @@ void OnlinePipeline::addImu(const ImuSample& sample) {
     if (gap_ns > fromSec(kTimeBaseJumpS) && timeBaseJumped(gap_ns)) {
       // The gate confirmed the IMU's jump on this sample, the LiDARs jumped alike: continue the
       // stream as if only the samples the gate held back had passed.
-      const int held_back = ImuGate::Config().jump_confirmations;
+      const int held_back = imu_gate_.config().jump_confirmations;
       const Stamp shift = gap_ns - held_back * std::max<Stamp>(imu_period_ns_, 1);
       time_jumps_.push_back({sample.stamp_ns, shift_ns_ + shift});
       log::warn("time base jumped by ", toSec(gap_ns), " s at ", toSec(sample.stamp_ns),
@@ -49,7 +50,7 @@ void OnlinePipeline::addImu(const ImuSample& sample) {
       shift_ns_ += shift;
       s.stamp_ns -= shift;
       imu_gate_.shiftBack(shift);
-      for (auto& [sensor, jump] : scan_jumps_) jump.run = 0;
+      for (auto& [sensor, jump] : scan_jumps_) jump.accepted();
     } else if (gap_ns <= fromSec(kTimeBaseJumpS)) {
       imu_period_ns_ = gap_ns;
     }
@@ -62,10 +63,14 @@ bool OnlinePipeline::timeBaseJumped(Stamp imu_jump_ns) const {
   // Every LiDAR's latest scans were held back for jumping by about as much as the IMU did.
   for (const auto& [sensor, offset] : offset_s_) {
     const auto j = scan_jumps_.find(sensor);
-    if (j == scan_jumps_.end() || j->second.run == 0) return false;
-    if (std::abs(toSec(j->second.size_ns - imu_jump_ns)) > kTimeBaseAgreementS) return false;
+    if (j == scan_jumps_.end() || !j->second.pending()) return false;
+    if (std::abs(toSec(j->second.pendingJumpNs() - imu_jump_ns)) > kTimeBaseAgreementS) return false;
   }
   return !offset_s_.empty();
+}
+
+StampJumpGuard& OnlinePipeline::scanJumpGuard(const std::string& sensor) {
+  return scan_jumps_.try_emplace(sensor, kMaxScanJumpS, kScanJumpConfirmations, kScanRunSpacingS).first->second;
 }
 
 Stamp OnlinePipeline::externalStamp(Stamp internal_ns) const {
@@ -88,19 +93,13 @@ void OnlinePipeline::addScan(LidarScan scan) {
   };
   if (last != last_scan_ns_.end()) {
     if (scan.start_ns <= last->second) return drop(&scan_drops_.out_of_order, "not after the previous scan of this LiDAR");
-    if (scan.start_ns - last->second > fromSec(kMaxScanJumpS)) {
-      // A lone stamp far ahead is corrupt; a LiDAR that stays there had a real gap.
-      Jump& jump = scan_jumps_[scan.sensor];
-      const bool continues = jump.run > 0 && scan.start_ns > jump.last_ns && scan.start_ns - jump.last_ns < fromSec(1.0);
-      if (!continues) jump.size_ns = scan.start_ns - last->second;
-      jump.run = continues ? jump.run + 1 : 1;
-      jump.last_ns = scan.start_ns;
-      if (jump.run < kScanJumpConfirmations)
-        return drop(&scan_drops_.jumped, "it starts " + std::to_string(toSec(scan.start_ns - last->second)) +
-                                             " s after this LiDAR's previous scan");
-    }
+    // A lone stamp far ahead is corrupt; a LiDAR that stays there had a real gap.
+    StampJumpGuard& jump = scanJumpGuard(scan.sensor);
+    if (jump.jumped(last->second, scan.start_ns) && jump.holdBack(last->second, scan.start_ns))
+      return drop(&scan_drops_.jumped, "it starts " + std::to_string(toSec(scan.start_ns - last->second)) +
+                                           " s after this LiDAR's previous scan");
   }
-  scan_jumps_[scan.sensor].run = 0;
+  scanJumpGuard(scan.sensor).accepted();
   last_scan_ns_[scan.sensor] = scan.start_ns;
   aligner_.add(scan);
   drain(false);

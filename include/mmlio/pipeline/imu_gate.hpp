@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "mmlio/core/types.hpp"
+#include "mmlio/pipeline/stamp_jump_guard.hpp"
 
 namespace mmlio::pipeline {
 
@@ -34,6 +35,7 @@ class ImuGate {
   /// True if the sample may reach the estimator.
   bool accept(const ImuSample& sample);
   const Counts& counts() const { return counts_; }
+  const Config& config() const { return cfg_; }
   /// Stamp of the last accepted sample (min() before the first).
   Stamp lastNs() const { return last_ns_; }
   /// The stream's time base moved back by delta (see OnlinePipeline): later stamps arrive shifted.
@@ -43,8 +45,7 @@ class ImuGate {
   Config cfg_;
   Counts counts_;
   Stamp last_ns_ = std::numeric_limits<Stamp>::min();
-  Stamp jump_ns_ = 0;   // the stamp a run of jumped samples started at
-  int jump_run_ = 0;    // how many consecutive samples agreed on the jump
+  StampJumpGuard jump_{cfg_.max_jump_s, cfg_.jump_confirmations, cfg_.max_jump_s};
 };
 
 }  // namespace mmlio::pipeline

@@ -12,6 +12,7 @@
 #include "mmlio/io/rig_config.hpp"
 #include "mmlio/lidar/sweep_aligner.hpp"
 #include "mmlio/pipeline/imu_gate.hpp"
+#include "mmlio/pipeline/stamp_jump_guard.hpp"
 
 namespace mmlio::pipeline {
 
@@ -62,13 +63,9 @@ class OnlinePipeline {
   ImuGate imu_gate_;
   ScanDrops scan_drops_;
   std::map<std::string, Stamp> last_scan_ns_;
-  struct Jump {
-    Stamp last_ns = 0;
-    int run = 0;
-    Stamp size_ns = 0;  // how far the run's first scan lay after the last accepted one
-  };
-  std::map<std::string, Jump> scan_jumps_;
+  std::map<std::string, StampJumpGuard> scan_jumps_;  // per LiDAR
   bool timeBaseJumped(Stamp imu_jump_ns) const;
+  StampJumpGuard& scanJumpGuard(const std::string& sensor);
   Stamp shift_ns_ = 0;                 // subtracted from every incoming stamp
   Stamp imu_period_ns_ = 0;            // latest spacing of accepted IMU samples
   std::vector<TimeBaseJump> time_jumps_;
