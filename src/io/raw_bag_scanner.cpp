@@ -58,6 +58,26 @@ Stamp fieldTime(const Fields& f) {
   return static_cast<Stamp>(u32(p)) * 1'000'000'000LL + static_cast<Stamp>(u32(p + 4));
 }
 
+/// Calls f(offset, fields, data, data_len) for each intact record of a chunk payload, in order,
+/// until the first damaged one (lengths running past the payload, unparsable header).
+template <class F>
+void forEachRecord(const std::vector<std::uint8_t>& payload, F f) {
+  const std::uint8_t* p = payload.data();
+  const std::size_t n = payload.size();
+  for (std::size_t i = 0; i + 4 <= n;) {
+    const std::uint32_t hl = u32(p + i);
+    if (hl > n - i - 4) return;
+    Fields fields;
+    if (!parseFields(p + i + 4, hl, &fields)) return;
+    const std::size_t dpos = i + 4 + hl + 4;
+    if (dpos > n) return;
+    const std::uint32_t dl = u32(p + i + 4 + hl);
+    if (dl > n - dpos) return;
+    f(i, fields, p + dpos, dl);
+    i = dpos + dl;
+  }
+}
+
 }  // namespace
 
 namespace {
@@ -156,18 +176,9 @@ bool indexLooksSound(const std::string& path, std::string* why) {
       } catch (const Error& e) {
         return fail(e.what());
       }
-      const std::uint8_t* p = payload.data();
-      const std::size_t n = payload.size();
-      for (std::size_t i = 0; i + 4 <= n;) {
-        const std::uint32_t hl = u32(p + i);
-        if (hl > n - i - 4 || i + 4 + hl + 4 > n) break;
-        Fields f;
-        if (!parseFields(p + i + 4, hl, &f)) break;
-        const std::uint32_t dl = u32(p + i + 4 + hl);
-        if (dl > n - (i + 4 + hl + 4)) break;
-        record_starts.insert(static_cast<std::uint32_t>(i));
-        i += 4 + hl + 4 + dl;
-      }
+      forEachRecord(payload, [&](std::size_t offset, const Fields&, const std::uint8_t*, std::uint32_t) {
+        record_starts.insert(static_cast<std::uint32_t>(offset));
+      });
     } else if (kind == kOpIndexData) {
       const std::uint32_t count = fieldU32(r.fields, "count");
       if (fieldU32(r.fields, "ver") != 1 || static_cast<std::uint64_t>(count) * 12 != r.data_len)
@@ -257,24 +268,13 @@ std::vector<std::uint8_t> readChunkPayload(std::ifstream& in, const RawChunk& c,
 
 void RawBagScanner::parsePayload(const std::vector<std::uint8_t>& payload, std::vector<RawMessage>* messages,
                                  RawChunk* chunk, std::map<std::uint32_t, RawConnection>* connections) {
-  const std::uint8_t* p = payload.data();
-  const std::size_t n = payload.size();
-  std::size_t i = 0;
   chunk->messages = 0;
   chunk->begin_ns = std::numeric_limits<Stamp>::max();
   chunk->end_ns = std::numeric_limits<Stamp>::min();
-  while (i + 4 <= n) {
-    const std::uint32_t hl = u32(p + i);
-    if (hl > n - i - 4) break;
-    Fields f;
-    if (!parseFields(p + i + 4, hl, &f)) break;
-    const std::size_t dpos = i + 4 + hl + 4;
-    if (dpos > n) break;
-    const std::uint32_t dl = u32(p + i + 4 + hl);
-    if (dl > n - dpos) break;
+  forEachRecord(payload, [&](std::size_t, const Fields& f, const std::uint8_t* data, std::uint32_t dl) {
     if (op(f) == kOpConnection && connections) {
       Fields ch;
-      if (parseFields(p + dpos, dl, &ch)) {
+      if (parseFields(data, dl, &ch)) {
         RawConnection c;
         c.topic = f.count("topic") ? f.at("topic") : ch["topic"];
         c.datatype = ch["type"];
@@ -286,10 +286,9 @@ void RawBagScanner::parsePayload(const std::vector<std::uint8_t>& payload, std::
       ++chunk->messages;
       chunk->begin_ns = std::min(chunk->begin_ns, t);
       chunk->end_ns = std::max(chunk->end_ns, t);
-      if (messages) messages->push_back({fieldU32(f, "conn"), t, std::vector<std::uint8_t>(p + dpos, p + dpos + dl)});
+      if (messages) messages->push_back({fieldU32(f, "conn"), t, std::vector<std::uint8_t>(data, data + dl)});
     }
-    i = dpos + dl;
-  }
+  });
 }
 
 std::size_t RawBagScanner::messages() const {
