@@ -325,9 +325,7 @@ class Node {
       report.input.queue_dropped_scans = queue_.dropped(kScanClass);
       const Trajectory& odometry = system_.odometryTrajectory();
       report.input.duration_s = toSec(odometry.back().stamp_ns - odometry.front().stamp_ns);
-      report.status = report.inputDegraded() ? "degraded: input dropped (see input.queue_dropped, input.imu_dropped, "
-                                               "input.scans_dropped)"
-                                             : "complete";
+      report.status = report.inputStatus();
       report = system_.writeOutputs(params_.out_dir, std::move(report));
       log::info("wrote ", report.outputs.trajectory, " (", report.outputs.poses, " poses), ", report.outputs.map, " (",
                 report.outputs.map_points, " points) and the report");

@@ -80,6 +80,13 @@ bool RunReport::inputDegraded() const {
          input.truncated || input.damaged_chunks > 0 || !input.time_base_jumps.empty();
 }
 
+std::string RunReport::inputStatus() const {
+  return inputDegraded() ? "degraded: input dropped or re-timed (see input.imu_dropped, input.scans_dropped, "
+                           "input.queue_dropped, input.skipped_messages, input.truncated, input.damaged_chunks, "
+                           "input.time_base_jumps)"
+                         : "complete";
+}
+
 Json toJson(const RunReport& r) {
   Json rep = Json::object();
   rep["status"] = r.status;

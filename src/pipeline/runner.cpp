@@ -99,10 +99,7 @@ RunResult runBag(const RunOptions& options) {
                     : "IMU initialisation never succeeded in " + options.bag_path + ": " + odometry.imuInit().message);
   }
 
-  RunReport report = system.report();
-  report.wall_time_s = wall.elapsedMs() * 1e-3;
-  report.realtime_factor =
-      report.wall_time_s > 0 ? toSec(odometry.lastImuNs() - source.beginNs()) / report.wall_time_s : 0.0;
+  RunReport report = system.report();  // wall time and real-time factor from the System's start
   RunReport::Input& input = report.input;
   input.source = options.bag_path;
   input.duration_s = toSec(source.endNs() - source.beginNs());
@@ -119,12 +116,9 @@ RunResult runBag(const RunOptions& options) {
   if (input.scans_out_of_order + input.scans_stamp_jumps > 0)
     log::warn("LiDAR: ", input.scans_out_of_order + input.scans_stamp_jumps, " scans dropped (out of order ",
               input.scans_out_of_order, ", stamp jumps ", input.scans_stamp_jumps, ")");
-  report.status = !result.complete ? "incomplete: " + result.error
+  report.status = !result.complete    ? "incomplete: " + result.error
                   : result.interrupted ? std::string("interrupted")
-                  : report.inputDegraded()
-                      ? std::string("degraded: input dropped or re-timed (see input.imu_dropped, input.scans_dropped, "
-                                    "input.skipped_messages, input.truncated, input.time_base_jumps)")
-                      : std::string("complete");
+                                       : report.inputStatus();
 
   // Trust: the stream after initialisation is covered by poses, and few of them were degraded.
   const Trajectory& poses = system.odometryTrajectory();

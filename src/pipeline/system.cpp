@@ -110,7 +110,6 @@ RunReport System::report() const {
     r.mapping = b.toJson();
     r.dynamic.map_points_judged = b.ghostRemoval().judged_points;
     r.dynamic.map_points_removed = b.ghostRemoval().removed_points;
-    return 0;
   });
   if (!backend_error_.empty()) r.mapping["error"] = backend_error_;
   return r;
@@ -129,7 +128,6 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
     map_points = b.map();
     if (cfg_.mapping.dynamic_map) dynamic_map = b.dynamicMap();
     for (const std::string& lidar : b.lidarNames()) lidar_maps[lidar] = b.lidarMap(lidar);
-    return 0;
   });
   report.dynamic.map_assembly_s = assembly.elapsedMs() * 1e-3;
   report.dynamic.dynamic_map_points = dynamic_map.size();

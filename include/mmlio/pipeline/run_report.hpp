@@ -75,8 +75,10 @@ struct RunReport {
   std::optional<eval::EvalResult> evaluation;  // with ground truth
   std::map<std::string, std::string> figures;
 
-  /// True when input was dropped, skipped or cut short (the status then says "degraded").
+  /// True when input was dropped, skipped, re-timed or cut short (the status then says "degraded").
   bool inputDegraded() const;
+  /// "complete", or "degraded: ..." naming where the report says what happened to the input.
+  std::string inputStatus() const;
 };
 
 Json toJson(const RunReport& report);
