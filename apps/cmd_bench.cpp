@@ -70,7 +70,7 @@ void registerBenchCommand(CLI::App& app) {
   auto args = std::make_shared<BenchArgs>();
   CLI::App* cmd = app.add_subcommand(
       "bench", "Per-stage timing (mean / p95 / p99 / max ms per sweep), real-time factors and memory on a bag");
-  cmd->add_option("bag", args->bag, "Input ROS1 bag (e.g. from `mmlio simulate`)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("bag", args->bag, "Input bag: ROS 1 .bag, ROS 2 .mcap, rosbag2 folder or .db3 (e.g. from `mmlio simulate`)")->required()->check(CLI::ExistingPath);
   cmd->add_option("-c,--config", args->config, "Rig config YAML (default: built-in)")->check(CLI::ExistingFile);
   cmd->add_option("-m,--mode", args->mode, "hvi | vi | hi")->check(CLI::IsMember({"hvi", "vi", "hi"}));
   cmd->add_option("--calib", args->calib, "Calibration YAML overriding the config's extrinsics (as `mmlio run --calib`)")

@@ -49,9 +49,9 @@ void registerCalibrateCommand(CLI::App& app) {
   auto args = std::make_shared<CalibrateArgs>();
   CLI::App* cmd = app.add_subcommand(
       "calibrate", "Spinning-to-solid-state LiDAR extrinsic and clock offset from a bag that starts at rest");
-  cmd->add_option("bag", args->bag, "Input ROS1 bag: standing still for the first second, then turning")
+  cmd->add_option("bag", args->bag, "Input bag (ROS 1 .bag, ROS 2 .mcap, rosbag2 folder or .db3): standing still for the first second, then turning")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingPath);
   cmd->add_option("-c,--config", args->config, "Rig config YAML (its extrinsics are the initial guess)")
       ->check(CLI::ExistingFile);
   cmd->add_option("-o,--out", args->out, "Calibration YAML to write")->capture_default_str();

@@ -99,8 +99,8 @@ void run(const RunArgs& a) {
 
 void registerRunCommand(CLI::App& app) {
   auto args = std::make_shared<RunArgs>();
-  CLI::App* cmd = app.add_subcommand("run", "Odometry and mapping on a ROS1 bag: trajectory.tum, map.pcd, report.json");
-  cmd->add_option("bag", args->bag, "Input ROS1 bag")->required()->check(CLI::ExistingFile);
+  CLI::App* cmd = app.add_subcommand("run", "Odometry and mapping on a ROS 1 or ROS 2 bag: trajectory.tum, map.pcd, report.json");
+  cmd->add_option("bag", args->bag, "Input bag: ROS 1 .bag, ROS 2 .mcap, rosbag2 folder or .db3")->required()->check(CLI::ExistingPath);
   cmd->add_option("-c,--config", args->config, "Rig config YAML (default: built-in = config/hvi.yaml)")
       ->check(CLI::ExistingFile);
   cmd->add_option("-o,--out", args->out, "Output directory")->capture_default_str();

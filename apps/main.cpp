@@ -7,7 +7,7 @@
 #include "mmlio/core/log.hpp"
 
 int main(int argc, char** argv) {
-  CLI::App app{"mmlio: multi-LiDAR-inertial odometry and mapping for ROS1 bags"};
+  CLI::App app{"mmlio: multi-LiDAR-inertial odometry and mapping for ROS 1 and ROS 2 bags"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "mmlio 0.1.0");
   bool verbose = false, quiet = false;

@@ -5,20 +5,25 @@
 #include <rosbag/view.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <set>
 
 #include "bag_open.hpp"
+#include "cdr_messages.hpp"
 #include "imu_unit.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
 #include "mmlio/io/cloud_decoders.hpp"
+#include "ros2_bag.hpp"
 
 namespace mmlio::io {
 namespace {
 
 constexpr int kSampledMessages = 50;
+const std::vector<std::string> kLivoxFields{"offset_time(uint32)", "x(float32)", "y(float32)", "z(float32)",
+                                            "reflectivity(uint8)", "tag(uint8)", "line(uint8)"};
 
 /// Fields and mean point count over the first messages of a cloud topic.
 void sampleClouds(rosbag::Bag& bag, const std::vector<std::string>& names, TopicInfo& info) {
@@ -33,10 +38,7 @@ void sampleClouds(rosbag::Bag& bag, const std::vector<std::string>& names, Topic
         points += static_cast<double>(c->width) * c->height;
         ++n;
       } else if (const auto l = m.instantiate<LivoxCustomMsg>()) {
-        if (info.fields.empty()) {
-          info.fields = {"offset_time(uint32)", "x(float32)", "y(float32)", "z(float32)",
-                         "reflectivity(uint8)", "tag(uint8)",  "line(uint8)"};
-        }
+        if (info.fields.empty()) info.fields = kLivoxFields;
         points += static_cast<double>(l->points.size());
         ++n;
       }
@@ -47,11 +49,68 @@ void sampleClouds(rosbag::Bag& bag, const std::vector<std::string>& names, Topic
   if (n > 0) info.mean_points = points / n;
 }
 
+BagInfo describeRos2Bag(const std::string& path) {
+  BagInfo info;
+  info.path = path;
+  const auto bag = detail::openRos2Bag(path);
+  info.format = bag->formatName();
+  bool any = false;
+  for (std::size_t i = 0; i < bag->topics().size(); ++i) {
+    const detail::Ros2Topic& r = bag->topics()[i];
+    TopicInfo t;
+    t.topic = r.name;
+    t.type = r.type;
+    t.messages = r.messages;
+    if (r.messages > 0) {
+      info.begin_ns = any ? std::min(info.begin_ns, r.begin_ns) : r.begin_ns;
+      info.end_ns = any ? std::max(info.end_ns, r.end_ns) : r.end_ns;
+      any = true;
+    }
+    if (r.messages >= 2 && r.end_ns > r.begin_ns)
+      t.rate_hz = static_cast<double>(r.messages - 1) / toSec(r.end_ns - r.begin_ns);
+    const detail::Ros2Type type = detail::ros2Type(r.type);
+    if (type != detail::Ros2Type::kOther && r.messages > 0) {
+      bag->restart({i});
+      detail::Ros2Message m;
+      double points = 0, acc = 0;
+      int n = 0;
+      while (n < kSampledMessages && bag->next(&m)) {
+        try {
+          if (type == detail::Ros2Type::kPointCloud2) {
+            const auto c = detail::decodePointCloud2Cdr(m.data);
+            if (t.fields.empty()) t.fields = pointFieldDescriptions(c);
+            points += static_cast<double>(c.width) * c.height;
+          } else if (type == detail::Ros2Type::kLivox) {
+            if (t.fields.empty()) t.fields = kLivoxFields;
+            points += static_cast<double>(detail::decodeLivoxCdr(m.data).points.size());
+          } else {
+            const auto& a = detail::decodeImuCdr(m.data).linear_acceleration;
+            acc += std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z);
+          }
+          ++n;
+        } catch (const std::exception& e) {
+          log::warn("info: cannot decode a sampled message of ", r.name, ": ", e.what());
+          break;
+        }
+      }
+      if (n > 0 && type != detail::Ros2Type::kImu) t.mean_points = points / n;
+      if (n > 0 && type == detail::Ros2Type::kImu && info.imu_unit_guess.empty())
+        info.imu_unit_guess = imuUnitFromMeanAcc(acc / n);
+    }
+    info.topics.push_back(std::move(t));
+  }
+  std::sort(info.topics.begin(), info.topics.end(),
+            [](const TopicInfo& a, const TopicInfo& b) { return a.topic < b.topic; });
+  return info;
+}
+
 }  // namespace
 
 BagInfo describeBag(const std::string& path) {
+  if (detail::ros2Format(path) != detail::Ros2Format::kNone) return describeRos2Bag(path);
   BagInfo info;
   info.path = path;
+  info.format = "ROS 1 bag";
   rosbag::Bag bag;
   detail::openBagForReading(bag, path);
   try {
@@ -91,8 +150,8 @@ std::string formatBagInfo(const BagInfo& info) {
   std::string out;
   char line[512];
   const double duration_s = toSec(info.end_ns - info.begin_ns);
-  std::snprintf(line, sizeof(line), "bag       %s\nduration  %.3f s (%.3f .. %.3f)\n", info.path.c_str(), duration_s,
-                toSec(info.begin_ns), toSec(info.end_ns));
+  std::snprintf(line, sizeof(line), "bag       %s\nformat    %s\nduration  %.3f s (%.3f .. %.3f)\n", info.path.c_str(),
+                info.format.c_str(), duration_s, toSec(info.begin_ns), toSec(info.end_ns));
   out += line;
   std::size_t tw = 5, yw = 4;
   for (const TopicInfo& t : info.topics) {

@@ -7,16 +7,20 @@
 #include <rosbag/view.h>
 
 #include <algorithm>
-#include <cmath>
 #include <boost/make_shared.hpp>
+#include <cmath>
+#include <limits>
 #include <set>
+#include <type_traits>
 
 #include "bag_open.hpp"
-#include "raw_bag_scanner.hpp"
+#include "cdr_messages.hpp"
 #include "imu_unit.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
 #include "mmlio/io/cloud_decoders.hpp"
+#include "raw_bag_scanner.hpp"
+#include "ros2_bag.hpp"
 
 namespace mmlio::io {
 namespace {
@@ -24,7 +28,14 @@ namespace {
 constexpr const char* kPointCloud2 = "sensor_msgs/PointCloud2";
 constexpr const char* kImu = "sensor_msgs/Imu";
 
-bool isLivoxType(const std::string& t) { return t == kLivoxCustomMsgType || t == kLivox2CustomMsgType; }
+// Types as ROS 1 or ROS 2 spell them.
+bool isImuType(const std::string& t) { return t == kImu || detail::ros2Type(t) == detail::Ros2Type::kImu; }
+bool isCloudType(const std::string& t) {
+  return t == kPointCloud2 || detail::ros2Type(t) == detail::Ros2Type::kPointCloud2;
+}
+bool isLivoxType(const std::string& t) {
+  return t == kLivoxCustomMsgType || t == kLivox2CustomMsgType || detail::ros2Type(t) == detail::Ros2Type::kLivox;
+}
 
 Stamp toNs(const ros::Time& t) { return static_cast<Stamp>(t.toNSec()); }
 
@@ -48,6 +59,29 @@ struct ChunkMessage {
     ros::serialization::IStream in(const_cast<std::uint8_t*>(m.data.data()), static_cast<std::uint32_t>(m.data.size()));
     ros::serialization::deserialize(in, *out);
     return out;
+  }
+};
+
+/// A CDR message of a ROS 2 bag, decoded into the ROS 1 message structs the
+/// decoders take.
+struct Ros2Msg {
+  const detail::Ros2Message& m;
+  const detail::Ros2Topic& t;
+  std::string topic() const { return t.name; }
+  std::string md5() const { return t.type; }
+  template <class T> boost::shared_ptr<T> instantiate() const {
+    if constexpr (std::is_same_v<T, sensor_msgs::Imu>) {
+      return detail::ros2Type(t.type) == detail::Ros2Type::kImu ? boost::make_shared<T>(detail::decodeImuCdr(m.data))
+                                                                : nullptr;
+    } else if constexpr (std::is_same_v<T, sensor_msgs::PointCloud2>) {
+      return detail::ros2Type(t.type) == detail::Ros2Type::kPointCloud2
+                 ? boost::make_shared<T>(detail::decodePointCloud2Cdr(m.data))
+                 : nullptr;
+    } else {
+      return detail::ros2Type(t.type) == detail::Ros2Type::kLivox
+                 ? boost::make_shared<T>(detail::decodeLivoxCdr(m.data))
+                 : nullptr;
+    }
   }
 };
 
@@ -85,10 +119,13 @@ struct BagSource::Impl {
   rosbag::Bag bag;
   std::unique_ptr<rosbag::View> view;
   rosbag::View::iterator it;
-  // Unindexed / truncated bag: read chunk by chunk instead of through the index.
+  // Unindexed / truncated bag: read chunk by chunk instead of through the
+  // index.
   std::unique_ptr<detail::RawBagScanner> raw;
   std::size_t raw_chunk = 0, raw_pos = 0;
   std::vector<detail::RawMessage> raw_buf;
+  // ROS 2 bag (rosbag2 folder, .db3 or .mcap).
+  std::unique_ptr<detail::Ros2Bag> ros2;
   std::map<std::string, Stream> streams;  // by normalised topic
   std::vector<CloudDecodeOptions> decode;
   std::map<std::string, DecodeStats> stats;
@@ -100,17 +137,20 @@ struct BagSource::Impl {
   void checkTopics(const BagSourceOptions& o, const std::vector<std::pair<std::string, std::string>>& connections);
   void estimateScanPeriods();
   void openRaw(const BagSourceOptions& options, const std::string& why);
+  void openRos2(const BagSourceOptions& options);
   template <class Msg> bool decodeMessage(const Msg& m, SensorEvent* event);
   bool nextRaw(SensorEvent* event);
+  bool nextRos2(SensorEvent* event);
 };
 
 void BagSource::Impl::checkTopics(const BagSourceOptions& o,
-                                   const std::vector<std::pair<std::string, std::string>>& connections) {
-  // topic -> datatype; a topic recorded with several types keeps the first one we can decode.
+                                  const std::vector<std::pair<std::string, std::string>>& connections) {
+  // topic -> datatype; a topic recorded with several types keeps the first one
+  // we can decode.
   std::map<std::string, std::string> types;
   for (const auto& [topic, datatype] : connections) {
     std::string& t = types[detail::normalizeTopic(topic)];
-    if (t.empty() || !(t == kImu || t == kPointCloud2 || isLivoxType(t))) t = datatype;
+    if (t.empty() || !(isImuType(t) || isCloudType(t) || isLivoxType(t))) t = datatype;
   }
   auto topicList = [&] {
     std::string out;
@@ -126,7 +166,7 @@ void BagSource::Impl::checkTopics(const BagSourceOptions& o,
   };
   if (!o.imu_topic.empty()) {
     const std::string& t = lookup(o.imu_topic, "IMU");
-    if (t != kImu) throw Error("topic " + o.imu_topic + " in " + path + " is " + t + ", expected " + kImu);
+    if (!isImuType(t)) throw Error("topic " + o.imu_topic + " in " + path + " is " + t + ", expected " + kImu);
     Stream s;
     s.type = Stream::Type::kImu;
     s.topic = o.imu_topic;
@@ -140,8 +180,10 @@ void BagSource::Impl::checkTopics(const BagSourceOptions& o,
     Stream s;
     s.lidar = static_cast<int>(i);
     s.topic = l.topic;
-    if (t == kPointCloud2) s.type = Stream::Type::kCloud;
-    else if (isLivoxType(t)) s.type = Stream::Type::kLivox;
+    if (isCloudType(t))
+      s.type = Stream::Type::kCloud;
+    else if (isLivoxType(t))
+      s.type = Stream::Type::kLivox;
     else
       throw Error("topic " + l.topic + " (LiDAR '" + l.name + "') in " + path + " is " + t + ", expected " +
                   kPointCloud2 + " or " + kLivoxCustomMsgType);
@@ -157,8 +199,9 @@ void BagSource::Impl::checkTopics(const BagSourceOptions& o,
   }
 }
 
-/// Clouds without per-point time get it from the azimuth over one turn: take the turn period
-/// from the topic's message rate (index only, no message is read).
+/// Clouds without per-point time get it from the azimuth over one turn: take
+/// the turn period from the topic's message rate (index only, no message is
+/// read).
 void BagSource::Impl::estimateScanPeriods() {
   for (auto& [key, s] : streams) {
     if (s.lidar < 0) continue;
@@ -171,11 +214,15 @@ void BagSource::Impl::estimateScanPeriods() {
 }
 
 BagSource::BagSource(const std::string& path, const BagSourceOptions& options) : impl_(std::make_unique<Impl>()) {
-  // rosbag prints every damaged record to stderr through console_bridge; the reader counts them
-  // and warns once per topic instead.
+  // rosbag prints every damaged record to stderr through console_bridge; the
+  // reader counts them and warns once per topic instead.
   console_bridge::setLogLevel(console_bridge::CONSOLE_BRIDGE_LOG_NONE);
   Impl& d = *impl_;
   d.path = path;
+  if (detail::ros2Format(path) != detail::Ros2Format::kNone) {
+    d.openRos2(options);
+    return;
+  }
   std::string why;
   if (!detail::tryOpenIndexed(d.bag, path, &why)) {
     d.openRaw(options, why);
@@ -250,6 +297,68 @@ void BagSource::Impl::openRaw(const BagSourceOptions& options, const std::string
   }
 }
 
+void BagSource::Impl::openRos2(const BagSourceOptions& options) {
+  ros2 = detail::openRos2Bag(path);
+  const std::vector<detail::Ros2Topic>& topics = ros2->topics();
+  std::vector<std::pair<std::string, std::string>> connections;
+  for (const detail::Ros2Topic& t : topics) connections.emplace_back(t.name, t.type);
+  checkTopics(options, connections);
+  if (streams.empty()) throw Error("nothing to read from " + path + ": no IMU topic and no LiDAR configured");
+  std::vector<std::size_t> selected;
+  std::size_t imu_topic = topics.size();
+  begin_ns = std::numeric_limits<Stamp>::max();
+  end_ns = std::numeric_limits<Stamp>::min();
+  for (std::size_t i = 0; i < topics.size(); ++i) {
+    const auto s = streams.find(detail::normalizeTopic(topics[i].name));
+    if (s == streams.end() || topics[i].messages == 0) continue;
+    selected.push_back(i);
+    begin_ns = std::min(begin_ns, topics[i].begin_ns);
+    end_ns = std::max(end_ns, topics[i].end_ns);
+    if (s->second.type == Stream::Type::kImu) imu_topic = i;
+    // Clouds without per-point time: the turn period from the topic's message
+    // rate.
+    if (s->second.lidar >= 0 && topics[i].messages >= 2 && topics[i].end_ns > topics[i].begin_ns) {
+      decode[static_cast<std::size_t>(s->second.lidar)].scan_period_s = std::clamp(
+          toSec(topics[i].end_ns - topics[i].begin_ns) / static_cast<double>(topics[i].messages - 1), 0.01, 1.0);
+    }
+  }
+  if (selected.empty()) begin_ns = end_ns = 0;
+  if (imu_topic < topics.size()) {
+    acc_scale = imuAccScaleFromMean(
+        [&] {
+          ros2->restart({imu_topic});
+          double sum = 0;
+          int n = 0;
+          detail::Ros2Message m;
+          while (n < 50 && ros2->next(&m)) {
+            try {
+              const auto& a = detail::decodeImuCdr(m.data).linear_acceleration;
+              const double norm = std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z);
+              if (!std::isfinite(norm)) continue;
+              sum += norm;
+              ++n;
+            } catch (const std::exception&) {
+            }
+          }
+          return n > 0 ? sum / n : -1.0;
+        },
+        options.imu_topic, options.acc_unit, path);
+  }
+  ros2->restart(selected);
+  current_ns = begin_ns;
+  log::info("reading ", path, " as ", ros2->formatName());
+}
+
+bool BagSource::Impl::nextRos2(SensorEvent* event) {
+  detail::Ros2Message m;
+  while (ros2->next(&m)) {
+    current_ns = m.time_ns;
+    if (decodeMessage(Ros2Msg{m, ros2->topics()[m.topic]}, event)) return true;
+  }
+  truncated = truncated || ros2->truncated();
+  return false;
+}
+
 bool BagSource::Impl::nextRaw(SensorEvent* event) {
   while (true) {
     if (raw_pos >= raw_buf.size()) {
@@ -295,14 +404,16 @@ template <class Msg> bool BagSource::Impl::decodeMessage(const Msg& m, SensorEve
             scan = decodePointCloud2(*msg, decode[li], &st);
             ++s.decoded;
           } catch (const Error& e) {
-            // The topic's first cloud failing is a format the decoder cannot read: stop with why. A
-            // later one (data shorter than width x point_step, ...) is one damaged message: skipped.
+            // The topic's first cloud failing is a format the decoder cannot
+            // read: stop with why. A later one (data shorter than width x
+            // point_step, ...) is one damaged message: skipped.
             if (s.decoded == 0)
               throw Error("topic " + s.topic + " message " + std::to_string(index) + " in " + path + ": " + e.what());
             ++skipped;
             if (s.failed++ == 0)
               log::warn("skipping message ", index, " of ", s.topic, " in ", path, ": ", e.what(),
-                        "; further damaged messages on this topic are counted in the report");
+                        "; further damaged messages on this topic are counted in "
+                        "the report");
             return false;
           }
         } else {
@@ -319,7 +430,8 @@ template <class Msg> bool BagSource::Impl::decodeMessage(const Msg& m, SensorEve
   } catch (const Error&) {
     throw;
   } catch (const std::exception& e) {
-    // rosbag / ros::serialization failures: skip this message, tell the user once per topic.
+    // rosbag / ros::serialization failures: skip this message, tell the user
+    // once per topic.
     ++skipped;
     if (s.failed++ == 0) {
       log::warn("skipping message ", index, " of ", s.topic, " in ", path, ": cannot deserialise (", e.what(),
@@ -331,10 +443,10 @@ template <class Msg> bool BagSource::Impl::decodeMessage(const Msg& m, SensorEve
 
 bool BagSource::next(SensorEvent* event) {
   Impl& d = *impl_;
-  if (d.done || (!d.view && !d.raw)) return false;
+  if (d.done || (!d.view && !d.raw && !d.ros2)) return false;
   try {
-    if (d.raw) {
-      if (d.nextRaw(event)) return true;
+    if (d.raw || d.ros2) {
+      if (d.raw ? d.nextRaw(event) : d.nextRos2(event)) return true;
       d.done = true;
       d.current_ns = d.end_ns;
       return false;
@@ -373,7 +485,10 @@ Stamp BagSource::endNs() const { return impl_->end_ns; }
 const std::map<std::string, DecodeStats>& BagSource::stats() const { return impl_->stats; }
 std::size_t BagSource::imuCount() const { return impl_->imu_count; }
 std::size_t BagSource::skippedMessages() const { return impl_->skipped; }
-bool BagSource::truncated() const { return impl_->truncated; }
-std::size_t BagSource::damagedChunks() const { return impl_->raw ? impl_->raw->damagedChunks() : 0; }
+bool BagSource::truncated() const { return impl_->truncated || (impl_->ros2 && impl_->ros2->truncated()); }
+std::size_t BagSource::damagedChunks() const {
+  if (impl_->ros2) return impl_->ros2->damagedStretches();
+  return impl_->raw ? impl_->raw->damagedChunks() : 0;
+}
 
 }  // namespace mmlio::io

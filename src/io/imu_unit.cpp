@@ -35,7 +35,10 @@ double meanImuAccNorm(rosbag::Bag& bag, const std::string& topic, int samples) {
 }
 
 std::string guessImuUnit(rosbag::Bag& bag, const std::string& topic) {
-  const double mean = meanImuAccNorm(bag, topic);
+  return imuUnitFromMeanAcc(meanImuAccNorm(bag, topic));
+}
+
+std::string imuUnitFromMeanAcc(double mean) {
   if (mean < 0) return "";
   return mean < 3.0 ? "g" : "m/s2";
 }
@@ -54,7 +57,7 @@ double imuAccScaleFromMean(const std::function<double()>& mean_fn, const std::st
     log::warn("cannot guess the IMU acceleration unit of ", topic, " in ", path, ": no readable message; assuming m/s^2");
     return 1.0;
   }
-  const bool g = mean < 3.0;
+  const bool g = imuUnitFromMeanAcc(mean) == "g";
   log::info("IMU ", topic, ": mean |acc| ", mean, " over the first messages -> ", g ? "g" : "m/s^2");
   return g ? kStandardGravity : 1.0;
 }

@@ -16,6 +16,8 @@ double meanImuAccNorm(rosbag::Bag& bag, const std::string& topic, int samples = 
 /// "g" when the mean |acc| is below 3 (nobody accelerates at 0.3 g for the first messages of a
 /// bag, and gravity in m/s^2 is 9.8), "m/s2" otherwise, "" when the topic has no readable message.
 std::string guessImuUnit(rosbag::Bag& bag, const std::string& topic);
+/// The same guess from a mean |acc| (negative: no readable message).
+std::string imuUnitFromMeanAcc(double mean);
 
 /// Multiplier to m/s^2 for acc_unit "g" (9.80665), "m/s2" (1) or "auto" (guessed; 1 with a
 /// warning when it cannot be). Throws mmlio::Error naming `path` for another unit.

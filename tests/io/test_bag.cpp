@@ -246,7 +246,7 @@ TEST(BagSourceErrors, MissingFileNotABagAndTruncatedBagAreOneLineErrors) {
   const std::string text = tempPath("text.bag");
   std::ofstream(text) << "hello, not a bag\n";
   msg = errorOf([&] { BagSource(text, rigOptions()); });
-  EXPECT_NE(msg.find("not a ROS1 bag"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("is not a bag"), std::string::npos) << msg;
 
   const std::string full = writeRigBag();
   const std::string cut = tempPath("cut.bag");

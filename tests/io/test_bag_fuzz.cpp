@@ -1,5 +1,6 @@
-// Fuzzing the bag reader and the message decoders (bounded, seeded, so CI runs it every time):
-// a small valid bag with all three message kinds, damaged many ways (bytes flipped, stretches
+// Fuzzing the bag readers and the message decoders (bounded, seeded, so CI runs it every time):
+// a small valid bag with all three message kinds (ROS 1, and its ROS 2 twins as .mcap and .db3),
+// damaged many ways (bytes flipped, stretches
 // overwritten, cut short), must either be refused with an mmlio::Error or stream events whose
 // points are finite, in a bounded number of steps. Anything else (another exception type, a
 // crash, a hang) fails.
@@ -16,6 +17,7 @@
 #include "mmlio/core/error.hpp"
 #include "mmlio/io/bag_source.hpp"
 #include "mmlio/io/bag_writer.hpp"
+#include "ros2_twin.hpp"
 
 namespace mmlio::io {
 namespace {
@@ -62,14 +64,18 @@ BagSourceOptions rig() {
   return o;
 }
 
-TEST(BagFuzz, DamagedBagsAreRefusedOrStreamFiniteEventsNeverAnythingElse) {
-  const fs::path dir = fs::temp_directory_path() / ("mmlio_fuzz_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  const std::vector<char> good = validBag((dir / "good.bag").string());
+std::vector<char> readAll(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+/// kCases damaged copies of `good`, written as `dir`/caseN`extension`: each refused with an
+/// mmlio::Error or streamed (finite points, bounded events).
+void fuzz(const std::vector<char>& good, const fs::path& dir, const std::string& extension, int kCases,
+          unsigned seed) {
   ASSERT_GT(good.size(), 1000u);
-  std::mt19937 rng(20261201);
+  std::mt19937 rng(seed);
   std::size_t refused = 0, streamed = 0, events_total = 0;
-  constexpr int kCases = 400;
   for (int c = 0; c < kCases; ++c) {
     std::vector<char> bytes = good;
     const auto pick = [&](std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng); };
@@ -91,7 +97,7 @@ TEST(BagFuzz, DamagedBagsAreRefusedOrStreamFiniteEventsNeverAnythingElse) {
         std::memcpy(&bytes[at], &big, 4);
       }
     }
-    const std::string path = (dir / ("case" + std::to_string(c) + ".bag")).string();
+    const std::string path = (dir / ("case" + std::to_string(c) + extension)).string();
     std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     try {
       BagSource src(path, rig());
@@ -99,8 +105,9 @@ TEST(BagFuzz, DamagedBagsAreRefusedOrStreamFiniteEventsNeverAnythingElse) {
       std::size_t events = 0;
       while (src.next(&e)) {
         ASSERT_LT(++events, 1000u) << "case " << c << ": more events than the bag holds";
-        if (e.kind == SensorEvent::Kind::kLidar)
+        if (e.kind == SensorEvent::Kind::kLidar) {
           for (const Point& p : e.scan.points) ASSERT_TRUE(p.xyz.allFinite()) << "case " << c;
+        }
       }
       ++streamed;
       events_total += events;
@@ -109,12 +116,38 @@ TEST(BagFuzz, DamagedBagsAreRefusedOrStreamFiniteEventsNeverAnythingElse) {
     }
     fs::remove(path);
   }
-  fs::remove_all(dir);
-  std::printf("%d damaged bags: %zu refused with a message, %zu streamed (%zu events)\n", kCases, refused, streamed,
-              events_total);
+  std::printf("%d damaged %s: %zu refused with a message, %zu streamed (%zu events)\n", kCases, extension.c_str(),
+              refused, streamed, events_total);
   EXPECT_EQ(refused + streamed, static_cast<std::size_t>(kCases));
   EXPECT_GT(streamed, 0u);
 }
 
+fs::path fuzzDir() {
+  const fs::path dir = fs::temp_directory_path() / ("mmlio_fuzz_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir;
+}
+
 }  // namespace
+
+TEST(BagFuzz, DamagedBagsAreRefusedOrStreamFiniteEventsNeverAnythingElse) {
+  const fs::path dir = fuzzDir();
+  fuzz(validBag((dir / "good.bag").string()), dir, ".bag", 400, 20261201);
+  fs::remove_all(dir);
+}
+
+TEST(BagFuzz, DamagedRos2BagsAreRefusedOrStreamFiniteEventsNeverAnythingElse) {
+  const fs::path dir = fuzzDir();
+  const std::string ros1 = (dir / "good.bag").string();
+  validBag(ros1);
+  const auto records = testing::ros2Records(ros1, "livox_ros_driver2/msg/CustomMsg");
+  testing::writeMcap(records, (dir / "good.mcap").string(), {true, "", 4096, true});
+  fuzz(readAll((dir / "good.mcap").string()), dir, ".mcap", 300, 20261202);
+  testing::writeMcap(records, (dir / "good_lz4.mcap").string(), {true, "lz4", 4096, true});
+  fuzz(readAll((dir / "good_lz4.mcap").string()), dir, ".mcap", 100, 20261203);
+  testing::writeRosbag2(records, (dir / "good_db3").string(), {"", 1, false});
+  fuzz(readAll((dir / "good_db3" / "good_db3_0.db3").string()), dir, ".db3", 200, 20261204);
+  fs::remove_all(dir);
+}
+
 }  // namespace mmlio::io

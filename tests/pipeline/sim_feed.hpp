@@ -3,7 +3,10 @@
 // (IMU by stamp, LiDAR scans by their start stamp), as `mmlio run` would see it.
 #include <algorithm>
 #include <functional>
+#include <limits>
+#include <string>
 
+#include "mmlio/io/bag_writer.hpp"
 #include "mmlio/io/rig_config.hpp"
 #include "mmlio/pipeline/online_pipeline.hpp"
 #include "mmlio/sim/simulator.hpp"
@@ -62,5 +65,30 @@ inline void replay(const sim::Simulator& sim, pipeline::OnlinePipeline& pipeline
 }
 
 inline void replay(const sim::Simulator& sim, pipeline::OnlinePipeline& pipeline) { replay(sim, pipeline, {}); }
+
+/// The simulated sequence as a bag at `path`, as `mmlio simulate` writes it (Livox IMU in g,
+/// Livox CustomMsg, Velodyne PointCloud2), without the IMU samples `keep_imu` refuses.
+inline void writeSimBag(const sim::Simulator& sim, const std::string& path,
+                        const std::function<bool(const ImuSample&)>& keep_imu = [](const ImuSample&) { return true; }) {
+  io::BagWriter bag(path);
+  const std::vector<ImuSample>& imu = sim.imu();
+  const Stamp kNever = std::numeric_limits<Stamp>::max();
+  std::size_t i = 0;
+  int l = 0, v = 0;
+  const auto livox = [&](int k) { return k < sim.numLivoxFrames() ? sim.startNs() + k * 100000000LL : kNever; };
+  const auto velodyne = [&](int k) { return k < sim.numVelodyneSweeps() ? sim.velodyneTrueStartNs(k) : kNever; };
+  while (i < imu.size() || livox(l) != kNever || velodyne(v) != kNever) {
+    const Stamp ti = i < imu.size() ? imu[i].stamp_ns : kNever;
+    if (ti <= livox(l) && ti <= velodyne(v)) {
+      if (keep_imu(imu[i])) bag.writeImu("/livox/imu", "livox_frame", imu[i], true);
+      ++i;
+    } else if (livox(l) <= velodyne(v)) {
+      bag.writeLivoxCloud("/livox/lidar", "livox_frame", sim.livoxFrame(l++));
+    } else {
+      bag.writeVelodyneCloud("/velodyne_points", "velodyne", sim.velodyneSweep(v++));
+    }
+  }
+  bag.close();
+}
 
 }  // namespace mmlio::testing

@@ -11,7 +11,6 @@
 
 #include "mmlio/eval/evaluation.hpp"
 #include "mmlio/core/error.hpp"
-#include "mmlio/io/bag_writer.hpp"
 #include "mmlio/pipeline/imu_gate.hpp"
 #include "mmlio/pipeline/runner.hpp"
 #include "sim_feed.hpp"
@@ -191,29 +190,10 @@ TEST(InputGates, AJumpOfTheWholeStreamsTimeBaseIsARestartNotAGapToExtrapolate) {
 
 namespace mmlio::pipeline {
 
-/// The simulated office as a bag (as `mmlio simulate` writes it), without the IMU samples `keep_imu`
-/// refuses.
+/// The simulated office as a bag in the temp folder, without the IMU samples `keep_imu` refuses.
 std::string officeBag(const sim::Simulator& sim, const std::string& name, const std::function<bool(const ImuSample&)>& keep_imu) {
   const std::string path = (std::filesystem::temp_directory_path() / name).string();
-  io::BagWriter bag(path);
-  const std::vector<ImuSample>& imu = sim.imu();
-  const Stamp kNever = std::numeric_limits<Stamp>::max();
-  std::size_t i = 0;
-  int l = 0, v = 0;
-  const auto livox = [&](int k) { return k < sim.numLivoxFrames() ? sim.startNs() + k * 100000000LL : kNever; };
-  const auto velodyne = [&](int k) { return k < sim.numVelodyneSweeps() ? sim.velodyneTrueStartNs(k) : kNever; };
-  while (i < imu.size() || livox(l) != kNever || velodyne(v) != kNever) {
-    const Stamp ti = i < imu.size() ? imu[i].stamp_ns : kNever;
-    if (ti <= livox(l) && ti <= velodyne(v)) {
-      if (keep_imu(imu[i])) bag.writeImu("/livox/imu", "livox_frame", imu[i], true);
-      ++i;
-    } else if (livox(l) <= velodyne(v)) {
-      bag.writeLivoxCloud("/livox/lidar", "livox_frame", sim.livoxFrame(l++));
-    } else {
-      bag.writeVelodyneCloud("/velodyne_points", "velodyne", sim.velodyneSweep(v++));
-    }
-  }
-  bag.close();
+  testing::writeSimBag(sim, path, keep_imu);
   return path;
 }
 

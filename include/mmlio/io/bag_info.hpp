@@ -1,5 +1,5 @@
 #pragma once
-// What is in a ROS1 bag, for `mmlio info` and for choosing topics in a rig config. No ROS types.
+// What is in a ROS 1 or ROS 2 bag, for `mmlio info` and for choosing topics in a rig config. No ROS types.
 
 #include <cstddef>
 #include <string>
@@ -19,12 +19,14 @@ struct TopicInfo {
 
 struct BagInfo {
   std::string path;
+  std::string format;                // "ROS 1 bag", "ROS 2 mcap (12 zstd chunks)", "ROS 2 sqlite3 (1 file)"
   Stamp begin_ns = 0, end_ns = 0;    // bag time of the first and last message
   std::vector<TopicInfo> topics;     // sorted by topic name
   std::string imu_unit_guess;        // first sensor_msgs/Imu topic: "g", "m/s2"; "" without IMU
 };
 
-/// Reads the index and a few messages per cloud / IMU topic. Throws mmlio::Error like BagSource.
+/// Reads the index (ROS 2: the database or a scan of the MCAP file) and a few messages per cloud /
+/// IMU topic. Throws mmlio::Error like BagSource.
 BagInfo describeBag(const std::string& path);
 /// Human-readable multi-line summary.
 std::string formatBagInfo(const BagInfo& info);

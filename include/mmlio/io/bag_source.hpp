@@ -1,9 +1,13 @@
 #pragma once
-// Streams a ROS1 bag as time-ordered sensor events (IMU samples, decoded LiDAR scans) through
-// rosbag::View, one message at a time: the bag is never loaded whole. No ROS types here.
+// Streams a bag as time-ordered sensor events (IMU samples, decoded LiDAR scans), one message at a
+// time: the bag is never loaded whole. No ROS types here. A ROS 1 bag is read through rosbag::View
+// (or its chunks when its index is damaged); a ROS 2 bag — a rosbag2 folder, a .db3 or an .mcap
+// file, recognised by its magic bytes — through src/io's own readers, its CDR messages decoded
+// into the same messages, so everything downstream is the same.
 //
 // Each configured LiDAR topic may carry sensor_msgs/PointCloud2 (any driver layout, see
-// cloud_decoders.hpp) or livox_ros_driver[2]/CustomMsg; the type found in the bag decides.
+// cloud_decoders.hpp) or a Livox CustomMsg (livox_ros_driver[2], livox_interfaces of
+// livox_ros2_driver); the type found in the bag decides.
 // Topics match with or without the leading '/'.
 
 #include <cstddef>
@@ -43,8 +47,8 @@ struct SensorEvent {
 
 class BagSource {
  public:
-  /// Opens and checks the bag. A truncated or unindexed bag is read from its chunks up to the last
-  /// complete message, with one warning. Throws mmlio::Error: missing file, not a bag, nothing
+  /// Opens and checks the bag. A truncated or unindexed bag (ROS 1 or .mcap) is read from its chunks
+  /// up to the last complete message, with one warning. Throws mmlio::Error: missing file, not a bag, nothing
   /// readable (suggesting `rosbag reindex`), configured topic missing (listing the bag's topics),
   /// topic of an unexpected type.
   BagSource(const std::string& path, const BagSourceOptions& options);
