@@ -62,8 +62,7 @@ struct ChunkMessage {
   }
 };
 
-/// A CDR message of a ROS 2 bag, decoded into the ROS 1 message structs the
-/// decoders take.
+/// A CDR message of a ROS 2 bag, decoded into the ROS 1 message structs the decoders take.
 struct Ros2Msg {
   const detail::Ros2Message& m;
   const detail::Ros2Topic& t;
@@ -119,8 +118,7 @@ struct BagSource::Impl {
   rosbag::Bag bag;
   std::unique_ptr<rosbag::View> view;
   rosbag::View::iterator it;
-  // Unindexed / truncated bag: read chunk by chunk instead of through the
-  // index.
+  // Unindexed / truncated bag: read chunk by chunk instead of through the index.
   std::unique_ptr<detail::RawBagScanner> raw;
   std::size_t raw_chunk = 0, raw_pos = 0;
   std::vector<detail::RawMessage> raw_buf;
@@ -145,8 +143,7 @@ struct BagSource::Impl {
 
 void BagSource::Impl::checkTopics(const BagSourceOptions& o,
                                   const std::vector<std::pair<std::string, std::string>>& connections) {
-  // topic -> datatype; a topic recorded with several types keeps the first one
-  // we can decode.
+  // topic -> datatype; a topic recorded with several types keeps the first one we can decode.
   std::map<std::string, std::string> types;
   for (const auto& [topic, datatype] : connections) {
     std::string& t = types[detail::normalizeTopic(topic)];
@@ -199,9 +196,8 @@ void BagSource::Impl::checkTopics(const BagSourceOptions& o,
   }
 }
 
-/// Clouds without per-point time get it from the azimuth over one turn: take
-/// the turn period from the topic's message rate (index only, no message is
-/// read).
+/// Clouds without per-point time get it from the azimuth over one turn: take the turn period
+/// from the topic's message rate (index only, no message is read).
 void BagSource::Impl::estimateScanPeriods() {
   for (auto& [key, s] : streams) {
     if (s.lidar < 0) continue;
@@ -214,8 +210,8 @@ void BagSource::Impl::estimateScanPeriods() {
 }
 
 BagSource::BagSource(const std::string& path, const BagSourceOptions& options) : impl_(std::make_unique<Impl>()) {
-  // rosbag prints every damaged record to stderr through console_bridge; the
-  // reader counts them and warns once per topic instead.
+  // rosbag prints every damaged record to stderr through console_bridge; the reader counts them
+  // and warns once per topic instead.
   console_bridge::setLogLevel(console_bridge::CONSOLE_BRIDGE_LOG_NONE);
   Impl& d = *impl_;
   d.path = path;
@@ -315,8 +311,7 @@ void BagSource::Impl::openRos2(const BagSourceOptions& options) {
     begin_ns = std::min(begin_ns, topics[i].begin_ns);
     end_ns = std::max(end_ns, topics[i].end_ns);
     if (s->second.type == Stream::Type::kImu) imu_topic = i;
-    // Clouds without per-point time: the turn period from the topic's message
-    // rate.
+    // Clouds without per-point time: the turn period from the topic's message rate.
     if (s->second.lidar >= 0 && topics[i].messages >= 2 && topics[i].end_ns > topics[i].begin_ns) {
       decode[static_cast<std::size_t>(s->second.lidar)].scan_period_s = std::clamp(
           toSec(topics[i].end_ns - topics[i].begin_ns) / static_cast<double>(topics[i].messages - 1), 0.01, 1.0);
@@ -404,16 +399,14 @@ template <class Msg> bool BagSource::Impl::decodeMessage(const Msg& m, SensorEve
             scan = decodePointCloud2(*msg, decode[li], &st);
             ++s.decoded;
           } catch (const Error& e) {
-            // The topic's first cloud failing is a format the decoder cannot
-            // read: stop with why. A later one (data shorter than width x
-            // point_step, ...) is one damaged message: skipped.
+            // The topic's first cloud failing is a format the decoder cannot read: stop with why. A
+            // later one (data shorter than width x point_step, ...) is one damaged message: skipped.
             if (s.decoded == 0)
               throw Error("topic " + s.topic + " message " + std::to_string(index) + " in " + path + ": " + e.what());
             ++skipped;
             if (s.failed++ == 0)
               log::warn("skipping message ", index, " of ", s.topic, " in ", path, ": ", e.what(),
-                        "; further damaged messages on this topic are counted in "
-                        "the report");
+                        "; further damaged messages on this topic are counted in the report");
             return false;
           }
         } else {
@@ -430,8 +423,7 @@ template <class Msg> bool BagSource::Impl::decodeMessage(const Msg& m, SensorEve
   } catch (const Error&) {
     throw;
   } catch (const std::exception& e) {
-    // rosbag / ros::serialization failures: skip this message, tell the user
-    // once per topic.
+    // rosbag / ros::serialization failures: skip this message, tell the user once per topic.
     ++skipped;
     if (s.failed++ == 0) {
       log::warn("skipping message ", index, " of ", s.topic, " in ", path, ": cannot deserialise (", e.what(),

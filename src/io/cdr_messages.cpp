@@ -10,8 +10,7 @@ namespace {
 
 namespace fc = eprosima::fastcdr;
 
-/// A CDR payload with its encapsulation header read (endianness from the
-/// header).
+/// A CDR payload with its encapsulation header read (endianness from the header).
 class CdrReader {
  public:
   explicit CdrReader(const std::vector<std::uint8_t>& data)
@@ -36,8 +35,7 @@ class CdrReader {
   template <class T> void array(T* out, std::size_t n) {
     if (n > 0) cdr_.deserializeArray(out, n);
   }
-  /// A sequence length, checked against the bytes left (a damaged length must
-  /// not allocate gigabytes).
+  /// A sequence length, checked against the bytes left (a damaged length must not allocate gigabytes).
   std::uint32_t length(std::size_t min_bytes_each, const char* what) {
     const auto n = get<std::uint32_t>();
     if (static_cast<std::uint64_t>(n) * min_bytes_each > left())
@@ -69,8 +67,7 @@ class CdrReader {
   fc::Cdr cdr_;
 };
 
-/// Fast CDR's own exceptions say "Not enough memory in the buffer stream": say
-/// what it means here.
+/// Fast CDR's own exceptions say "Not enough memory in the buffer stream": say what it means here.
 template <class F> auto decodeOrExplain(const std::vector<std::uint8_t>& cdr, const char* type, F&& decode) {
   try {
     return decode();

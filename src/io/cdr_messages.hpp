@@ -1,9 +1,8 @@
 #pragma once
-// Private helper of src/io: ROS 2 messages (CDR, as rosbag2 stores them)
-// decoded into the same message structs the ROS 1 reader fills, so that every
-// decoder and check behind them is shared. Layouts are the ROS 2 IDL ones:
-// builtin_interfaces/Time is int32 sec + uint32 nanosec, and fields are aligned
-// to their size counted from the end of the 4-byte encapsulation header.
+// Private helper of src/io: ROS 2 messages (CDR, as rosbag2 stores them) decoded into the same message structs the ROS
+// 1 reader fills, so that every decoder and check behind them is shared. Layouts are the ROS 2 IDL ones:
+// builtin_interfaces/Time is int32 sec + uint32 nanosec, and fields are aligned to their size counted from the end of
+// the 4-byte encapsulation header.
 #include <sensor_msgs/Imu.h>
 #include <sensor_msgs/PointCloud2.h>
 
@@ -17,14 +16,12 @@ namespace mmlio::io::detail {
 
 /// What a ROS 2 type name is to the reader.
 enum class Ros2Type { kOther, kImu, kPointCloud2, kLivox };
-/// "sensor_msgs/msg/Imu", "sensor_msgs/msg/PointCloud2", and the Livox ROS 2
-/// drivers' CustomMsg
-/// ("livox_ros_driver2/msg/CustomMsg", "livox_interfaces/msg/CustomMsg" of
-/// livox_ros2_driver).
+/// "sensor_msgs/msg/Imu", "sensor_msgs/msg/PointCloud2", and the Livox ROS 2 drivers' CustomMsg
+/// ("livox_ros_driver2/msg/CustomMsg", "livox_interfaces/msg/CustomMsg" of livox_ros2_driver).
 Ros2Type ros2Type(const std::string& type);
 
-/// Each throws (a std::exception, never a crash) when the payload is shorter
-/// than its fields or a sequence length exceeds the bytes left.
+/// Each throws (a std::exception, never a crash) when the payload is shorter than its fields or a sequence length
+/// exceeds the bytes left.
 sensor_msgs::Imu decodeImuCdr(const std::vector<std::uint8_t>& cdr);
 sensor_msgs::PointCloud2 decodePointCloud2Cdr(const std::vector<std::uint8_t>& cdr);
 LivoxCustomMsg decodeLivoxCdr(const std::vector<std::uint8_t>& cdr);

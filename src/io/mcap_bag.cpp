@@ -1,8 +1,6 @@
-// MCAP reader (https://mcap.dev/spec), written from the specification: the file
-// is scanned once, front to back, so that a file without summary or index, or
-// cut short, reads like a complete one. Messages are then streamed in log-time
-// order from the chunks (none, zstd or lz4) and from messages written outside
-// chunks.
+// MCAP reader (https://mcap.dev/spec), written from the specification: the file is scanned once, front to back, so that
+// a file without summary or index, or cut short, reads like a complete one. Messages are then streamed in log-time
+// order from the chunks (none, zstd or lz4) and from messages written outside chunks.
 #include <zlib.h>
 
 #include <algorithm>
@@ -67,8 +65,8 @@ class Fields {
   std::size_t n_, pos_ = 0;
 };
 
-/// Calls f(opcode, content, length) for each complete record of `data`; false
-/// when a record's length runs past the end (damage).
+/// Calls f(opcode, content, length) for each complete record of `data`; false when a record's length runs past the end
+/// (damage).
 template <class F> bool forEachRecord(const std::uint8_t* data, std::size_t size, F&& f) {
   std::size_t pos = 0;
   while (pos < size) {
@@ -121,8 +119,7 @@ class McapBag final : public Ros2Bag {
   }
 
  private:
-  /// A chunk, or one message written outside chunks: the units messages are
-  /// loaded in.
+  /// A chunk, or one message written outside chunks: the units messages are loaded in.
   struct Unit {
     std::uint64_t offset = 0,
                   size = 0;  // chunk: its compressed records; message: its whole content
@@ -131,8 +128,7 @@ class McapBag final : public Ros2Bag {
     std::string compression;
     std::uint64_t uncompressed_size = 0;
     std::uint32_t crc = 0;
-    std::uint64_t topics = 0;  // bit i: topic i (< 64) has messages inside; all
-                               // bits for more topics
+    std::uint64_t topics = 0;  // bit i: topic i (< 64) has messages inside; all bits for more topics
   };
   struct Pending {
     Stamp time_ns;
@@ -195,9 +191,7 @@ class McapBag final : public Ros2Bag {
     std::stable_sort(units_.begin(), units_.end(),
                      [](const Unit& a, const Unit& b) { return a.start_ns < b.start_ns; });
     if (truncated_) {
-      log::warn(path_,
-                " ends inside a record (recording cut short?): reading it up "
-                "to its last complete ",
+      log::warn(path_, " ends inside a record (recording cut short?): reading it up to its last complete ",
                 units_.empty() ? "record" : "chunk or message");
     }
   }
@@ -208,8 +202,7 @@ class McapBag final : public Ros2Bag {
     try {
       const auto rec = readAt(content, len);
       Fields f(rec.data(), rec.size());
-      f.get<std::uint64_t>();  // message start and end time: taken from the
-                               // messages themselves
+      f.get<std::uint64_t>();  // message start and end time: taken from the messages themselves
       f.get<std::uint64_t>();
       u.uncompressed_size = f.get<std::uint64_t>();
       u.crc = f.get<std::uint32_t>();

@@ -1,8 +1,7 @@
 #pragma once
-// Private helper of src/io: a ROS 2 bag — a rosbag2 sqlite3 folder
-// (metadata.yaml + .db3 files, uncompressed or zstd per file or per message),
-// one .db3 file, or an .mcap file — as a stream of serialised (CDR) messages in
-// receive-time order. Needs no ROS 2 installation.
+// Private helper of src/io: a ROS 2 bag — a rosbag2 sqlite3 folder (metadata.yaml + .db3 files, uncompressed or zstd
+// per file or per message), one .db3 file, or an .mcap file — as a stream of serialised (CDR) messages in receive-time
+// order. Needs no ROS 2 installation.
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -15,9 +14,8 @@ namespace mmlio::io::detail {
 
 enum class Ros2Format { kNone, kFolder, kSqlite3, kMcap };
 
-/// Which ROS 2 container `path` is (kFolder: a rosbag2 folder), from whether it
-/// is a folder and from the file's magic bytes (SQLite, MCAP, zstd for a
-/// per-file compressed .db3.zstd); kNone for anything else.
+/// Which ROS 2 container `path` is (kFolder: a rosbag2 folder), from whether it is a folder and from the file's magic
+/// bytes (SQLite, MCAP, zstd for a per-file compressed .db3.zstd); kNone for anything else.
 Ros2Format ros2Format(const std::string& path);
 
 struct Ros2Topic {
@@ -37,18 +35,14 @@ class Ros2Bag {
   virtual ~Ros2Bag() = default;
 
   const std::vector<Ros2Topic>& topics() const { return topics_; }
-  /// "ROS 2 mcap (zstd chunks)", "ROS 2 sqlite3 (2 files)": for messages and
-  /// `mmlio info`.
+  /// "ROS 2 mcap (zstd chunks)", "ROS 2 sqlite3 (2 files)": for messages and `mmlio info`.
   const std::string& formatName() const { return format_; }
-  /// Read only these topics (indices into topics()) from the start again; all
-  /// topics after open.
+  /// Read only these topics (indices into topics()) from the start again; all topics after open.
   virtual void restart(const std::vector<std::size_t>& topics) = 0;
-  /// Next message of the selected topics in time order (ties in file order);
-  /// false at the end. A damaged stretch is skipped (counted in
-  /// damagedStretches()), never thrown.
+  /// Next message of the selected topics in time order (ties in file order); false at the end. A damaged stretch is
+  /// skipped (counted in damagedStretches()), never thrown.
   virtual bool next(Ros2Message* message) = 0;
-  /// The file ends inside a record (recording killed): read up to the last
-  /// complete one.
+  /// The file ends inside a record (recording killed): read up to the last complete one.
   bool truncated() const { return truncated_; }
   /// Chunks / database pages that could not be read and were skipped.
   std::size_t damagedStretches() const { return damaged_; }
@@ -60,12 +54,12 @@ class Ros2Bag {
   std::size_t damaged_ = 0;
 };
 
-/// Opens and indexes the bag at `path` (a folder, .db3, .db3.zstd or .mcap; an
-/// MCAP file is scanned once, front to back). Throws mmlio::Error with one
-/// line: not a ROS 2 bag, a folder without metadata.yaml or data files, a file
+/// Opens and indexes the bag at `path` (a folder, .db3, .db3.zstd or .mcap; an MCAP file is scanned once, front to
+/// back). Throws mmlio::Error with one line: not a ROS 2 bag, a folder without metadata.yaml or data files, a file
 /// metadata.yaml lists but that is missing, an unreadable database.
 std::unique_ptr<Ros2Bag> openRos2Bag(const std::string& path);
-/// The MCAP reader behind openRos2Bag.
+/// The readers behind openRos2Bag: one .mcap file; .db3 (or .db3.zstd) files of one bag.
 std::unique_ptr<Ros2Bag> openMcap(const std::string& path);
+std::unique_ptr<Ros2Bag> openSqlite3(const std::string& where, const std::vector<std::string>& files);
 
 }  // namespace mmlio::io::detail

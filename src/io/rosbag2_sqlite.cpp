@@ -1,10 +1,7 @@
-// rosbag2's sqlite3 storage: a folder with metadata.yaml and one or more .db3
-// files (split bags), each with tables topics(id, name, type, ...) and
-// messages(id, topic_id, timestamp, data). Compression as rosbag2 writes it:
-// zstd per file (.db3.zstd, decompressed to a temporary copy) or per message
-// (each blob a zstd frame, recognised by its magic bytes).
+// rosbag2's sqlite3 storage: one or more .db3 files (split bags), each with tables topics(id, name, type, ...) and
+// messages(id, topic_id, timestamp, data). Compression as rosbag2 writes it: zstd per file (.db3.zstd, decompressed to
+// a temporary copy) or per message (each blob a zstd frame, recognised by its magic bytes).
 #include <sqlite3.h>
-#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cstring>
@@ -21,10 +18,6 @@ namespace mmlio::io::detail {
 namespace {
 
 namespace fs = std::filesystem;
-
-bool endsWith(const std::string& s, const std::string& tail) {
-  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
-}
 
 /// One .db3 file and its cursor over the selected topics.
 struct Database {
@@ -122,8 +115,7 @@ class Sqlite3Bag final : public Ros2Bag {
         ++compressed_files_;
       }
     } else {
-      throw Error("cannot read " + file +
-                  (fs::exists(file) ? " (permission denied?)" : " (listed in metadata.yaml, missing)"));
+      throw Error("cannot read " + file + " (permission denied?)");
     }
     auto d = std::make_unique<Database>();
     d->path = file;
@@ -151,8 +143,7 @@ class Sqlite3Bag final : public Ros2Bag {
     sqlite3_finalize(s);
     if (rc != SQLITE_DONE) throw Error("cannot read the topics of " + d.error());
     if (sqlite3_prepare_v2(d.db,
-                           "SELECT topic_id, COUNT(*), MIN(timestamp), "
-                           "MAX(timestamp) FROM messages GROUP BY topic_id",
+                           "SELECT topic_id, COUNT(*), MIN(timestamp), MAX(timestamp) FROM messages GROUP BY topic_id",
                            -1, &s, nullptr) != SQLITE_OK)
       throw Error("cannot read " + d.error() + " (not a rosbag2 sqlite3 database?)");
     while ((rc = sqlite3_step(s)) == SQLITE_ROW) {
@@ -190,85 +181,10 @@ class Sqlite3Bag final : public Ros2Bag {
   std::size_t compressed_files_ = 0;
 };
 
-/// The data files of a rosbag2 folder, from its metadata.yaml or, without one,
-/// every .db3 / .mcap in it.
-std::vector<std::string> folderFiles(const fs::path& dir, std::string* storage) {
-  const fs::path meta = dir / "metadata.yaml";
-  std::vector<std::string> files;
-  if (fs::exists(meta)) {
-    try {
-      const YAML::Node info = YAML::LoadFile(meta.string())["rosbag2_bagfile_information"];
-      if (!info) throw Error("no rosbag2_bagfile_information");
-      *storage = info["storage_identifier"] ? info["storage_identifier"].as<std::string>() : "sqlite3";
-      for (const auto& f : info["relative_file_paths"]) files.push_back((dir / f.as<std::string>()).string());
-    } catch (const std::exception& e) {
-      throw Error("cannot read " + meta.string() + ": " + e.what());
-    }
-    if (files.empty()) throw Error(meta.string() + " lists no files (relative_file_paths is empty)");
-    return files;
-  }
-  for (const auto& e : fs::directory_iterator(dir)) {
-    const std::string name = e.path().filename().string();
-    if (endsWith(name, ".db3") || endsWith(name, ".db3.zstd")) files.push_back(e.path().string());
-  }
-  *storage = "sqlite3";
-  if (files.empty()) {
-    for (const auto& e : fs::directory_iterator(dir))
-      if (endsWith(e.path().filename().string(), ".mcap")) files.push_back(e.path().string());
-    *storage = "mcap";
-  }
-  if (files.empty())
-    throw Error(dir.string() +
-                " is a folder without metadata.yaml, .db3 or "
-                ".mcap files: not a rosbag2 bag");
-  std::sort(files.begin(), files.end());
-  log::warn(dir.string(), " has no metadata.yaml: reading its ", files.size(), " ", *storage, " file(s) in name order");
-  return files;
-}
-
 }  // namespace
 
-Ros2Format ros2Format(const std::string& path) {
-  std::error_code ec;
-  if (fs::is_directory(path, ec))
-    return fs::exists(fs::path(path) / "metadata.yaml") || !fs::is_empty(path, ec) ? Ros2Format::kFolder
-                                                                                   : Ros2Format::kNone;
-  std::uint8_t head[16] = {};
-  std::size_t got = 0;
-  if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
-    got = std::fread(head, 1, sizeof(head), f);
-    std::fclose(f);
-  }
-  if (got >= 16 && std::memcmp(head, "SQLite format 3", 16) == 0) return Ros2Format::kSqlite3;
-  if (got >= 8 && std::memcmp(head, "\x89MCAP0\r\n", 8) == 0) return Ros2Format::kMcap;
-  if (isZstdFrame(head, got) && endsWith(path, ".db3.zstd")) return Ros2Format::kSqlite3;
-  return Ros2Format::kNone;
-}
-
-std::unique_ptr<Ros2Bag> openRos2Bag(const std::string& path) {
-  switch (ros2Format(path)) {
-    case Ros2Format::kSqlite3:
-      return std::make_unique<Sqlite3Bag>(path, std::vector<std::string>{path});
-    case Ros2Format::kMcap:
-      return openMcap(path);
-    case Ros2Format::kFolder: {
-      std::string storage;
-      const std::vector<std::string> files = folderFiles(path, &storage);
-      if (storage == "mcap") {
-        if (files.size() > 1)
-          throw Error(path + " is split into " + std::to_string(files.size()) +
-                      " .mcap files; reading split MCAP bags is not supported "
-                      "yet: pass one .mcap file, or merge them");
-        return openMcap(files.front());
-      }
-      if (storage != "sqlite3")
-        throw Error(path + ": rosbag2 storage '" + storage + "' is not read (sqlite3 and mcap are)");
-      return std::make_unique<Sqlite3Bag>(path, files);
-    }
-    case Ros2Format::kNone:
-      break;
-  }
-  throw Error(path + " is not a ROS 2 bag");
+std::unique_ptr<Ros2Bag> openSqlite3(const std::string& where, const std::vector<std::string>& files) {
+  return std::make_unique<Sqlite3Bag>(where, files);
 }
 
 }  // namespace mmlio::io::detail

@@ -1,10 +1,8 @@
 #pragma once
-// Test helper: writes the ROS 2 twin of a ROS 1 bag — the same messages,
-// CDR-encoded as the ROS 2 drivers publish them, in an .mcap file or a rosbag2
-// sqlite3 folder — so that tests can check that both read the same. Its CDR
-// encoder, MCAP and rosbag2 writers are written here from the formats'
-// specifications, independently of the reader in src/io (which decodes through
-// Fast CDR).
+// Test helper: writes the ROS 2 twin of a ROS 1 bag — the same messages, CDR-encoded as the ROS 2 drivers publish them,
+// in an .mcap file or a rosbag2 sqlite3 folder — so that tests can check that both read the same. Its CDR encoder, MCAP
+// and rosbag2 writers are written here from the formats' specifications, independently of the reader in src/io (which
+// decodes through Fast CDR).
 #include <lz4frame.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
@@ -27,8 +25,7 @@
 
 namespace mmlio::testing {
 
-/// Little-endian CDR with the 4-byte encapsulation header; alignment counted
-/// after the header.
+/// Little-endian CDR with the 4-byte encapsulation header; alignment counted after the header.
 class CdrWriter {
  public:
   CdrWriter() : b_{0x00, 0x01, 0x00, 0x00} {}
@@ -112,8 +109,7 @@ struct Ros2Record {
   std::vector<std::uint8_t> cdr;
 };
 
-/// Every message of a ROS 1 bag (Imu, PointCloud2, Livox CustomMsg) in bag
-/// order, CDR-encoded.
+/// Every message of a ROS 1 bag (Imu, PointCloud2, Livox CustomMsg) in bag order, CDR-encoded.
 inline std::vector<Ros2Record> ros2Records(const std::string& ros1_bag, const std::string& livox_type) {
   rosbag::Bag bag(ros1_bag, rosbag::bagmode::Read);
   std::vector<Ros2Record> out;
@@ -284,6 +280,23 @@ inline void writeMcap(const std::vector<Ros2Record>& records, const std::string&
   if (!f) throw std::runtime_error("cannot write " + path);
 }
 
+/// A rosbag2 folder with storage mcap, split into `files` .mcap files by message count.
+inline void writeSplitMcap(const std::vector<Ros2Record>& records, const std::string& dir, int files) {
+  namespace fs = std::filesystem;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream meta(fs::path(dir) / "metadata.yaml");
+  meta << "rosbag2_bagfile_information:\n  version: 8\n  storage_identifier: mcap\n  relative_file_paths:\n";
+  const std::size_t per = (records.size() + static_cast<std::size_t>(files) - 1) / static_cast<std::size_t>(files);
+  for (int f = 0; f < files; ++f) {
+    const std::string name = "part_" + std::to_string(f) + ".mcap";
+    const auto first = records.begin() + static_cast<long>(std::min(records.size(), f * per));
+    const auto last = records.begin() + static_cast<long>(std::min(records.size(), (f + 1) * per));
+    writeMcap({first, last}, (fs::path(dir) / name).string(), {true, "zstd", 1 << 20, true});
+    meta << "    - " << name << "\n";
+  }
+}
+
 // ---- rosbag2 sqlite3
 // ------------------------------------------------------------------------
 
@@ -325,14 +338,11 @@ inline void writeRosbag2(const std::vector<Ros2Record>& records, const std::stri
     sqlite3* db = nullptr;
     sqlite3_open(path.c_str(), &db);
     exec(db,
-         "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, "
-         "type TEXT NOT NULL, "
-         "serialization_format TEXT NOT NULL, offered_qos_profiles TEXT "
-         "NOT NULL)");
+         "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL, serialization_format "
+         "TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL)");
     exec(db,
-         "CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER "
-         "NOT NULL, timestamp INTEGER NOT NULL, "
-         "data BLOB NOT NULL)");
+         "CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, timestamp INTEGER NOT NULL, data "
+         "BLOB NOT NULL)");
     exec(db, "CREATE INDEX timestamp_idx ON messages (timestamp ASC)");
     exec(db, "BEGIN");
     std::map<std::string, std::int64_t> ids;
@@ -341,8 +351,7 @@ inline void writeRosbag2(const std::vector<Ros2Record>& records, const std::stri
     for (std::size_t i = f * per_file; i < std::min(records.size(), (f + 1) * per_file); ++i) {
       const Ros2Record& r = records[i];
       if (!ids.count(r.topic)) {
-        // Reversed ids per file: the reader must match topics by name, not by
-        // id.
+        // Reversed ids per file: the reader must match topics by name, not by id.
         const std::int64_t id = 100 - static_cast<std::int64_t>(ids.size()) - f;
         ids[r.topic] = id;
         exec(db,
@@ -370,16 +379,14 @@ inline void writeRosbag2(const std::vector<Ros2Record>& records, const std::stri
   }
   if (!o.metadata) return;
   std::ofstream meta(fs::path(dir) / "metadata.yaml");
-  meta << "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: "
-          "sqlite3\n"
+  meta << "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: sqlite3\n"
        << "  duration:\n    nanoseconds: " << (records.back().time_ns - records.front().time_ns) << "\n"
        << "  starting_time:\n    nanoseconds_since_epoch: " << records.front().time_ns << "\n"
        << "  message_count: " << records.size() << "\n  topics_with_message_count:\n";
   for (const auto& [t, n] : per_topic) {
     meta << "    - topic_metadata:\n        name: " << t << "\n        type: " << type_of[t]
-         << "\n        serialization_format: cdr\n        "
-            "offered_qos_profiles: \"\"\n      message_count: "
-         << n << "\n";
+         << "\n        serialization_format: cdr\n        offered_qos_profiles: \"\"\n      message_count: " << n
+         << "\n";
   }
   meta << "  compression_format: \"" << (o.compression.empty() ? "" : "zstd") << "\"\n"
        << "  compression_mode: \""

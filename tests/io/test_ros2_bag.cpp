@@ -1,9 +1,7 @@
-// ROS 2 bags in: the ROS 2 twins of a simulated ROS 1 bag (.mcap with every
-// chunk compression, with and without chunks and summary; rosbag2 sqlite3
-// folders uncompressed, zstd per file and per message, split, without
-// metadata.yaml) stream exactly the ROS 1 bag's events and give `mmlio run` the
-// same trajectory; a truncated .mcap is read up to its last complete chunk; bad
-// ROS 2 input gets one line or a counted skip.
+// ROS 2 bags in: the ROS 2 twins of a simulated ROS 1 bag (.mcap with every chunk compression, with and without chunks
+// and summary; rosbag2 sqlite3 folders uncompressed, zstd per file and per message, split, without metadata.yaml)
+// stream exactly the ROS 1 bag's events and give `mmlio run` the same trajectory; a truncated .mcap is read up to its
+// last complete chunk; bad ROS 2 input gets one line or a counted skip.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -40,8 +38,7 @@ sim::Simulator office(double duration_s) {
   return sim::Simulator(so);
 }
 
-/// A 2 s simulated office as a ROS 1 bag and its ROS 2 records, made once for
-/// the suite.
+/// A 2 s simulated office as a ROS 1 bag and its ROS 2 records, made once for the suite.
 struct Fixture {
   sim::Simulator sim = office(2.0);
   std::string ros1 = (kDir / "office2.bag").string();
@@ -108,6 +105,9 @@ TEST(Ros2Bag, McapTwinsStreamExactlyTheRos1BagsEvents) {
     testing::writeMcap(fixture().records, path, c.o);
     expectSameEvents(want, events(path), c.name);
   }
+  // A rosbag2 folder split into three .mcap files.
+  testing::writeSplitMcap(fixture().records, (kDir / "split_mcap").string(), 3);
+  expectSameEvents(want, events((kDir / "split_mcap").string()), "split mcap folder");
 }
 
 TEST(Ros2Bag, Rosbag2SqliteTwinsStreamExactlyTheRos1BagsEvents) {
@@ -206,8 +206,7 @@ TEST(Ros2Bag, BadRos2InputGetsOneClearLineOrACountedSkip) {
   std::ofstream(text) << "hello";
   EXPECT_NE(error(text).find("is not a bag"), std::string::npos) << error(text);
 
-  // CDR payloads too short for their fields (an IMU sample, a cloud after the
-  // first) are skipped and counted.
+  // CDR payloads too short for their fields (an IMU sample, a cloud after the first) are skipped and counted.
   records = fixture().records;
   int imu = 0, clouds = 0;
   for (auto& r : records) {
