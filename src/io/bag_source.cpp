@@ -269,27 +269,27 @@ void BagSource::Impl::openRaw(const BagSourceOptions& options, const std::string
             "; `rosbag reindex ", path, "` would restore the index");
   if (!options.imu_topic.empty()) {
     const std::string imu_key = detail::normalizeTopic(options.imu_topic);
-    acc_scale = imuAccScaleFromMean(
-        [&] {
-          double sum = 0;
-          int n = 0;
-          for (std::size_t i = 0; i < raw->chunks().size() && n < 50; ++i) {
-            for (const detail::RawMessage& m : raw->readChunk(i)) {
-              const auto c = raw->connections().find(m.conn);
-              if (c == raw->connections().end() || detail::normalizeTopic(c->second.topic) != imu_key) continue;
-              try {
-                const auto imu = ChunkMessage{m, c->second}.instantiate<sensor_msgs::Imu>();
-                if (!imu) continue;
-                const auto& a = imu->linear_acceleration;
-                sum += std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z);
-                if (++n >= 50) break;
-              } catch (const std::exception&) {
-              }
-            }
-          }
-          return n > 0 ? sum / n : -1.0;
-        },
-        options.imu_topic, options.acc_unit, path);
+    // The IMU messages of the chunks in order, for the unit guess.
+    std::size_t chunk = 0, pos = 0;
+    std::vector<detail::RawMessage> messages;
+    const auto next = [&](sensor_msgs::Imu* out) {
+      while (true) {
+        if (pos == messages.size()) {
+          if (chunk == raw->chunks().size()) return false;
+          messages = raw->readChunk(chunk++);
+          pos = 0;
+          continue;
+        }
+        const detail::RawMessage& m = messages[pos++];
+        const auto c = raw->connections().find(m.conn);
+        if (c == raw->connections().end() || detail::normalizeTopic(c->second.topic) != imu_key) continue;
+        if (const auto imu = ChunkMessage{m, c->second}.instantiate<sensor_msgs::Imu>()) {
+          *out = *imu;
+          return true;
+        }
+      }
+    };
+    acc_scale = imuAccScaleFromMean([&] { return meanImuAccNorm(next); }, options.imu_topic, options.acc_unit, path);
   }
 }
 
@@ -319,25 +319,14 @@ void BagSource::Impl::openRos2(const BagSourceOptions& options) {
   }
   if (selected.empty()) begin_ns = end_ns = 0;
   if (imu_topic < topics.size()) {
-    acc_scale = imuAccScaleFromMean(
-        [&] {
-          ros2->restart({imu_topic});
-          double sum = 0;
-          int n = 0;
-          detail::Ros2Message m;
-          while (n < 50 && ros2->next(&m)) {
-            try {
-              const auto& a = detail::decodeImuCdr(m.data).linear_acceleration;
-              const double norm = std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z);
-              if (!std::isfinite(norm)) continue;
-              sum += norm;
-              ++n;
-            } catch (const std::exception&) {
-            }
-          }
-          return n > 0 ? sum / n : -1.0;
-        },
-        options.imu_topic, options.acc_unit, path);
+    ros2->restart({imu_topic});
+    const auto next = [&](sensor_msgs::Imu* out) {
+      detail::Ros2Message m;
+      if (!ros2->next(&m)) return false;
+      *out = detail::decodeImuCdr(m.data);
+      return true;
+    };
+    acc_scale = imuAccScaleFromMean([&] { return meanImuAccNorm(next); }, options.imu_topic, options.acc_unit, path);
   }
   ros2->restart(selected);
   current_ns = begin_ns;

@@ -10,28 +10,46 @@
 
 namespace mmlio::io {
 
-double meanImuAccNorm(rosbag::Bag& bag, const std::string& topic, int samples) {
-  std::vector<std::string> topics{topic};
-  if (!topic.empty() && topic.front() == '/') topics.push_back(topic.substr(1));
-  else topics.push_back("/" + topic);
-  rosbag::View view(bag, rosbag::TopicQuery(topics));
+double meanImuAccNorm(const std::function<bool(sensor_msgs::Imu*)>& next, int samples) {
   double sum = 0.0;
   int n = 0;
-  try {
-    for (const rosbag::MessageInstance& m : view) {
-      if (n >= samples) break;
-      const auto imu = m.instantiate<sensor_msgs::Imu>();
-      if (!imu) continue;
-      const auto& a = imu->linear_acceleration;
-      const double norm = std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z);
-      if (!std::isfinite(norm)) continue;
-      sum += norm;
-      ++n;
+  sensor_msgs::Imu imu;
+  // Unreadable messages are skipped, a bounded number of them: a damaged stream ends the sample.
+  for (int tries = 0; n < samples && tries < 10 * samples; ++tries) {
+    try {
+      if (!next(&imu)) break;
+    } catch (const std::exception&) {
+      continue;
     }
-  } catch (const std::exception&) {
-    // A damaged message ends the sample; the guess uses what was read.
+    const auto& a = imu.linear_acceleration;
+    const double norm = std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z);
+    if (!std::isfinite(norm)) continue;
+    sum += norm;
+    ++n;
   }
   return n > 0 ? sum / n : -1.0;
+}
+
+double meanImuAccNorm(rosbag::Bag& bag, const std::string& topic, int samples) {
+  std::vector<std::string> topics{topic};
+  if (!topic.empty() && topic.front() == '/')
+    topics.push_back(topic.substr(1));
+  else
+    topics.push_back("/" + topic);
+  rosbag::View view(bag, rosbag::TopicQuery(topics));
+  auto it = view.begin();
+  return meanImuAccNorm(
+      [&](sensor_msgs::Imu* out) {
+        while (it != view.end()) {
+          const auto imu = (it++)->instantiate<sensor_msgs::Imu>();
+          if (imu) {
+            *out = *imu;
+            return true;
+          }
+        }
+        return false;
+      },
+      samples);
 }
 
 std::string guessImuUnit(rosbag::Bag& bag, const std::string& topic) {
@@ -54,7 +72,8 @@ double imuAccScaleFromMean(const std::function<double()>& mean_fn, const std::st
   if (acc_unit != "auto") throw Error("imu.acc_unit '" + acc_unit + "' is not auto, g or m/s2");
   const double mean = mean_fn();
   if (mean < 0) {
-    log::warn("cannot guess the IMU acceleration unit of ", topic, " in ", path, ": no readable message; assuming m/s^2");
+    log::warn("cannot guess the IMU acceleration unit of ", topic, " in ", path,
+              ": no readable message; assuming m/s^2");
     return 1.0;
   }
   const bool g = imuUnitFromMeanAcc(mean) == "g";

@@ -1,6 +1,7 @@
 #pragma once
 // Private helper of src/io: which unit an IMU topic reports its acceleration in.
 #include <rosbag/bag.h>
+#include <sensor_msgs/Imu.h>
 
 #include <functional>
 #include <string>
@@ -9,8 +10,10 @@ namespace mmlio::io {
 
 inline constexpr double kStandardGravity = 9.80665;
 
-/// Mean |linear_acceleration| over the first `samples` messages of `topic` (its own View, so the
-/// main stream is untouched); negative when the topic has no readable message.
+/// Mean |linear_acceleration| over the first `samples` finite messages `next` yields (false: no
+/// more; a throw: that message is unreadable, try the next); negative when none is readable.
+double meanImuAccNorm(const std::function<bool(sensor_msgs::Imu*)>& next, int samples = 50);
+/// The same over the first messages of `topic` (its own View, so the main stream is untouched).
 double meanImuAccNorm(rosbag::Bag& bag, const std::string& topic, int samples = 50);
 
 /// "g" when the mean |acc| is below 3 (nobody accelerates at 0.3 g for the first messages of a
