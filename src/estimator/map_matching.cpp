@@ -1,5 +1,7 @@
 #include "mmlio/estimator/map_matching.hpp"
 
+#include <cmath>
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -44,6 +46,14 @@ std::vector<MapMatch> findMapMatches(const Features& f, const Eigen::Isometry3d&
   for (std::size_t i = 0; i < matches.size(); ++i)
     if (found[i]) out.push_back(matches[i]);
   return out;
+}
+
+double matchDistance(const MapMatch& m, const Eigen::Isometry3d& T_world_body) {
+  const Eigen::Vector3d q = T_world_body * m.p_body;
+  if (m.kind == MapMatch::Kind::kPlane) return std::abs(m.a.dot(q) + m.b.x());
+  const Eigen::Vector3d u = m.b.normalized();
+  const Eigen::Vector3d d = q - m.a;
+  return (d - u * u.dot(d)).norm();
 }
 
 ceres::CostFunction* mapMatchCost(const MapMatch& m, double weight) {

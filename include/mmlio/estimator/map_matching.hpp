@@ -38,6 +38,9 @@ std::vector<MapMatch> findMapMatches(const Features& f, const Eigen::Isometry3d&
                                      const map::VoxelHashMap& edge_map, const map::VoxelHashMap& plane_map,
                                      const MapMatchConfig& cfg = MapMatchConfig());
 
+/// The metric distance of the match's point, placed by T_world_body, from its plane or line.
+double matchDistance(const MapMatch& m, const Eigen::Isometry3d& T_world_body);
+
 /// The point-to-plane / point-to-edge residual of a match on one pose block, whitened by weight.
 ceres::CostFunction* mapMatchCost(const MapMatch& m, double weight);
 
