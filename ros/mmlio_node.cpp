@@ -288,7 +288,11 @@ class Node {
     last_stamp_ns_pose_ = r.state.stamp_ns;
     if (!ros::ok()) return;  // draining the queue after shutdown: outputs only
 
-    odometry_pub_.publish(toOdometry(r.state, T_odom_body, omega_body,
+    // Messages carry the input's stamps, also after a jump of its time base.
+    NavState state = r.state;
+    state.stamp_ns = system_.externalStamp(r.state.stamp_ns);
+    const Stamp stamp_ns = state.stamp_ns;
+    odometry_pub_.publish(toOdometry(state, T_odom_body, omega_body,
                                      poseCovariance(r.degeneracy, r.state.q_world_body, params_.point_sigma_m),
                                      params_.odom_frame, params_.body_frame));
     if (params_.publish_tf) {
@@ -297,18 +301,18 @@ class Node {
       const Eigen::Isometry3d T_map_odom = r.keyframe || !map_odom_known_ ? system_.mapFromOdom() : T_map_odom_;
       T_map_odom_ = T_map_odom;
       map_odom_known_ = true;
-      tf_.sendTransform({toTransform(T_map_odom, r.state.stamp_ns, params_.map_frame, params_.odom_frame),
-                         toTransform(T_odom_body, r.state.stamp_ns, params_.odom_frame, params_.body_frame)});
+      tf_.sendTransform({toTransform(T_map_odom, stamp_ns, params_.map_frame, params_.odom_frame),
+                         toTransform(T_odom_body, stamp_ns, params_.odom_frame, params_.body_frame)});
     }
     if (scan_pub_.getNumSubscribers() > 0)
-      scan_pub_.publish(toPointCloud2(r.points_body, T_odom_body, r.state.stamp_ns, params_.odom_frame));
+      scan_pub_.publish(toPointCloud2(r.points_body, T_odom_body, stamp_ns, params_.odom_frame));
     if (!r.keyframe) return;
     // Keyframes: the corrected path (loops move it), and now and then the global map.
     if (path_pub_.getNumSubscribers() > 0) path_pub_.publish(toPath(system_.trajectory(), params_.map_frame));
     const double since_map_s = toSec(r.state.stamp_ns - last_map_ns_);
     if (params_.map_publish_period_s > 0 && since_map_s >= params_.map_publish_period_s &&
         map_pub_.getNumSubscribers() > 0) {
-      map_pub_.publish(toPointCloud2(system_.map(), Eigen::Isometry3d::Identity(), r.state.stamp_ns, params_.map_frame));
+      map_pub_.publish(toPointCloud2(system_.map(), Eigen::Isometry3d::Identity(), stamp_ns, params_.map_frame));
       last_map_ns_ = r.state.stamp_ns;
     }
   }

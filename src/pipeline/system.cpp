@@ -70,6 +70,8 @@ Trajectory System::trajectory() const {
   return inputTime(mapping_.read([](const MappingBackend& b) { return b.correctedTrajectory(); }));
 }
 
+Stamp System::externalStamp(Stamp internal_ns) const { return online_.externalStamp(internal_ns); }
+
 Eigen::Isometry3d System::mapFromOdom() const {
   return mapping_.read([](const MappingBackend& b) { return b.correction(); });
 }

@@ -47,6 +47,9 @@ class System {
   Trajectory trajectory() const;
   /// Loop correction at the newest pose, map <- odom (identity before the first loop).
   Eigen::Isometry3d mapFromOdom() const;
+  /// The input's stamp of an estimator stamp (SweepResult::state): after a jump of the input's time
+  /// base the estimator runs on shifted stamps (see OnlinePipeline::externalStamp).
+  Stamp externalStamp(Stamp internal_ns) const;
   std::size_t loops() const;
   /// The map at the corrected poses (the back end pauses while it is assembled).
   std::vector<Point> map() const;
