@@ -24,6 +24,9 @@ enum Op : std::uint8_t {
   kChannel = 0x04,
   kMessage = 0x05,
   kChunk = 0x06,
+  kMessageIndex = 0x07,
+  kChunkIndex = 0x08,
+  kStatistics = 0x0B,
   kDataEnd = 0x0F
 };
 constexpr std::size_t kRecordHeader = 9;    // opcode + uint64 length
@@ -87,10 +90,12 @@ class McapBag final : public Ros2Bag {
     if (!file_) throw Error("cannot read " + path + " (permission denied?)");
     file_.seekg(0, std::ios::end);
     size_ = static_cast<std::uint64_t>(file_.tellg());
-    scan();
+    const bool indexed = openFromSummary();
+    if (!indexed) scan();
     std::string comp;
     for (const auto& [c, n] : compressions_) comp += (comp.empty() ? "" : ", ") + std::to_string(n) + " " + c;
-    format_ = "ROS 2 mcap (" + (comp.empty() ? std::string("no chunks") : comp + " chunks") + ")";
+    format_ = "ROS 2 mcap (" + (comp.empty() ? std::string("no chunks") : comp + " chunks") +
+              (indexed ? ", indexed" : ", scanned") + ")";
     std::vector<std::size_t> all(topics_.size());
     for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
     restart(all);
@@ -149,6 +154,124 @@ class McapBag final : public Ros2Bag {
     if (static_cast<std::uint64_t>(file_.gcount()) != size)
       throw Error("cannot read " + path_ + " at byte " + std::to_string(offset));
     return buf;
+  }
+
+  /// A complete file with a summary (schemas, channels, statistics, chunk indexes) and message
+  /// indexes: topics, counts and chunks from those, without decompressing a chunk. False (nothing
+  /// kept) when any of it is missing or does not add up; the file is then scanned.
+  bool openFromSummary() {
+    try {
+      constexpr std::uint64_t kFooterRecord = kRecordHeader + 20;
+      if (size_ < 8 + kFooterRecord + 8 || std::memcmp(readAt(size_ - 8, 8).data(), kMagic, 8) != 0) return false;
+      const auto footer = readAt(size_ - 8 - kFooterRecord, kFooterRecord);
+      if (footer[0] != kFooter) return false;
+      Fields ff(footer.data() + kRecordHeader, 20);
+      const auto summary_start = ff.get<std::uint64_t>();
+      if (summary_start < 8 || summary_start >= size_ - 8 - kFooterRecord) return false;
+      const auto summary = readAt(summary_start, size_ - 8 - kFooterRecord - summary_start);
+      struct ChunkIndex {
+        Stamp start_ns;
+        std::uint64_t offset, length;
+        std::vector<std::pair<std::uint16_t, std::uint64_t>> message_indexes;  // channel, offset
+      };
+      std::vector<ChunkIndex> chunks;
+      std::uint64_t message_count = 0;
+      bool have_statistics = false;
+      const bool intact = forEachRecord(summary.data(), summary.size(), [&](std::uint8_t op, const std::uint8_t* p, std::size_t n) {
+        if (op == kSchema || op == kChannel) {
+          definition(op, p, n);
+        } else if (op == kStatistics) {
+          message_count = Fields(p, n).get<std::uint64_t>();
+          have_statistics = true;
+        } else if (op == kChunkIndex) {
+          Fields f(p, n);
+          ChunkIndex c;
+          c.start_ns = static_cast<Stamp>(f.get<std::uint64_t>());
+          f.get<std::uint64_t>();
+          c.offset = f.get<std::uint64_t>();
+          c.length = f.get<std::uint64_t>();
+          const auto map_bytes = f.get<std::uint32_t>();
+          for (std::uint32_t k = 0; k + 10 <= map_bytes; k += 10) {
+            const auto channel = f.get<std::uint16_t>();
+            c.message_indexes.emplace_back(channel, f.get<std::uint64_t>());
+          }
+          chunks.push_back(std::move(c));
+        }
+      });
+      if (!intact || !have_statistics || chunks.empty()) return forgetSummary();
+      std::uint64_t indexed_messages = 0;
+      for (const ChunkIndex& c : chunks) {
+        Unit u;
+        u.chunk = true;
+        u.start_ns = c.start_ns;
+        if (c.length < kRecordHeader || c.offset + c.length > summary_start) return forgetSummary();
+        chunkHeader(c.offset + kRecordHeader, c.length - kRecordHeader, &u);
+        for (const auto& [channel, offset] : c.message_indexes) {
+          const auto t = channel_topic_.find(channel);
+          if (t == channel_topic_.end()) return forgetSummary();
+          indexed_messages += messageIndex(offset, t->second);
+          u.topics |= t->second < 64 ? std::uint64_t{1} << t->second : ~std::uint64_t{0};
+        }
+        ++compressions_[u.compression.empty() ? "uncompressed" : u.compression];
+        if (u.topics) units_.push_back(u);
+      }
+      if (indexed_messages != message_count) return forgetSummary();
+      std::stable_sort(units_.begin(), units_.end(), [](const Unit& a, const Unit& b) { return a.start_ns < b.start_ns; });
+      return true;
+    } catch (const Error&) {
+      return forgetSummary();
+    }
+  }
+
+  bool forgetSummary() {
+    schemas_.clear();
+    channel_topic_.clear();
+    compressions_.clear();
+    topics_.clear();
+    units_.clear();
+    return false;
+  }
+
+  /// The fields of a Chunk record before its records; u gets where they are and how to read them.
+  void chunkHeader(std::uint64_t content, std::uint64_t len, Unit* u) {
+    const auto head = readAt(content, std::min<std::uint64_t>(len, 28 + 4));
+    Fields f(head.data(), head.size());
+    f.get<std::uint64_t>();
+    f.get<std::uint64_t>();
+    u->uncompressed_size = f.get<std::uint64_t>();
+    u->crc = f.get<std::uint32_t>();
+    const auto name_len = f.get<std::uint32_t>();
+    if (32 + name_len + 8 > len) throw Error("chunk header runs past the chunk");
+    const auto rest = readAt(content + 32, name_len + 8);
+    u->compression.assign(reinterpret_cast<const char*>(rest.data()), name_len);
+    std::uint64_t records = 0;
+    std::memcpy(&records, rest.data() + name_len, 8);
+    u->offset = content + 32 + name_len + 8;
+    u->size = records;
+    if (records > len - 32 - name_len - 8) throw Error("chunk records run past the chunk");
+  }
+
+  /// Counts the messages a MessageIndex record lists for `topic`; returns how many.
+  std::uint64_t messageIndex(std::uint64_t offset, std::size_t topic) {
+    if (offset + kRecordHeader > size_) throw Error("message index past the end");
+    const auto head = readAt(offset, kRecordHeader);
+    std::uint64_t len = 0;
+    std::memcpy(&len, head.data() + 1, 8);
+    if (head[0] != kMessageIndex || len > size_ - offset - kRecordHeader) throw Error("not a message index");
+    const auto rec = readAt(offset + kRecordHeader, len);
+    Fields f(rec.data(), rec.size());
+    f.get<std::uint16_t>();
+    const auto bytes = f.get<std::uint32_t>();
+    Ros2Topic& t = topics_[topic];
+    std::uint64_t n = 0;
+    for (std::uint32_t k = 0; k + 16 <= bytes; k += 16, ++n) {
+      const auto log_time = static_cast<Stamp>(f.get<std::uint64_t>());
+      f.get<std::uint64_t>();
+      if (t.messages++ == 0) t.begin_ns = t.end_ns = log_time;
+      t.begin_ns = std::min(t.begin_ns, log_time);
+      t.end_ns = std::max(t.end_ns, log_time);
+    }
+    return n;
   }
 
   void scan() {

@@ -192,6 +192,8 @@ inline void writeMcap(const std::vector<Ros2Record>& records, const std::string&
   std::uint64_t chunk_start = 0, chunk_end = 0, first = ~0ull, last = 0;
   std::size_t chunks = 0;
   auto out = [&]() -> McapBytes& { return o.chunked ? chunk : file; };
+  std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, std::uint64_t>>> chunk_index;  // channel: time, offset
+  std::vector<McapBytes> chunk_indexes;  // for the summary
   auto flush = [&] {
     if (!o.chunked || chunk.b.empty()) return;
     McapBytes c;
@@ -203,7 +205,37 @@ inline void writeMcap(const std::vector<Ros2Record>& records, const std::string&
     const auto data = compress(chunk.b, o.compression);
     c.put<std::uint64_t>(data.size());
     c.b.insert(c.b.end(), data.begin(), data.end());
+    const std::uint64_t chunk_offset = file.b.size();
     file.record(0x06, c);
+    const std::uint64_t chunk_length = file.b.size() - chunk_offset;
+    // Message indexes after the chunk, one per channel, and the chunk's index for the summary.
+    McapBytes offsets;
+    const std::uint64_t indexes_start = file.b.size();
+    for (const auto& [channel, entries] : chunk_index) {
+      offsets.put(channel);
+      offsets.put<std::uint64_t>(file.b.size());
+      McapBytes mi;
+      mi.put(channel);
+      mi.put<std::uint32_t>(static_cast<std::uint32_t>(entries.size() * 16));
+      for (const auto& [t, at] : entries) {
+        mi.put(t);
+        mi.put(at);
+      }
+      file.record(0x07, mi);
+    }
+    McapBytes ci;
+    ci.put(chunk_start);
+    ci.put(chunk_end);
+    ci.put(chunk_offset);
+    ci.put(chunk_length);
+    ci.put<std::uint32_t>(static_cast<std::uint32_t>(offsets.b.size()));
+    ci.b.insert(ci.b.end(), offsets.b.begin(), offsets.b.end());
+    ci.put<std::uint64_t>(file.b.size() - indexes_start);
+    ci.string(o.compression);
+    ci.put<std::uint64_t>(data.size());
+    ci.put<std::uint64_t>(chunk.b.size());
+    chunk_indexes.emplace_back().record(0x08, ci);
+    chunk_index.clear();
     chunk.b.clear();
     ++chunks;
   };
@@ -242,6 +274,7 @@ inline void writeMcap(const std::vector<Ros2Record>& records, const std::string&
     m.put(r.time_ns);
     m.put(r.time_ns);
     m.b.insert(m.b.end(), r.cdr.begin(), r.cdr.end());
+    if (o.chunked) chunk_index[channel].emplace_back(r.time_ns, chunk.b.size());
     out().record(0x05, m);
     if (chunk.b.size() >= o.chunk_bytes) flush();
   }
@@ -253,6 +286,7 @@ inline void writeMcap(const std::vector<Ros2Record>& records, const std::string&
   if (o.summary) {
     summary_start = file.b.size();
     for (const McapBytes& d : definitions) file.b.insert(file.b.end(), d.b.begin(), d.b.end());
+    for (const McapBytes& d : chunk_indexes) file.b.insert(file.b.end(), d.b.begin(), d.b.end());
     McapBytes stats;
     stats.put<std::uint64_t>(records.size());
     stats.put<std::uint16_t>(static_cast<std::uint16_t>(schema_of_type.size()));

@@ -97,6 +97,7 @@ TEST(Ros2Bag, McapTwinsStreamExactlyTheRos1BagsEvents) {
     testing::McapOptions o;
   };
   const Case cases[] = {{"chunks-none", {true, "", 1 << 20, true}},
+                        {"chunks-zstd-no-summary", {true, "zstd", 1 << 20, false}},
                         {"chunks-zstd", {true, "zstd", 1 << 20, true}},
                         {"chunks-lz4-small", {true, "lz4", 64 << 10, true}},
                         {"no-chunks-no-summary", {false, "", 0, false}}};
@@ -104,6 +105,9 @@ TEST(Ros2Bag, McapTwinsStreamExactlyTheRos1BagsEvents) {
     const std::string path = (kDir / (std::string(c.name) + ".mcap")).string();
     testing::writeMcap(fixture().records, path, c.o);
     expectSameEvents(want, events(path), c.name);
+    // With a summary and message indexes the file is opened from them, without a scan.
+    const bool indexed = c.o.chunked && c.o.summary;
+    EXPECT_NE(describeBag(path).format.find(indexed ? "indexed" : "scanned"), std::string::npos) << c.name;
   }
   // A rosbag2 folder split into three .mcap files.
   testing::writeSplitMcap(fixture().records, (kDir / "split_mcap").string(), 3);
