@@ -113,7 +113,9 @@ bool keepPoint(const Eigen::Vector3f& xyz, double time_value, const CloudDecodeO
 }
 
 LidarScan finish(std::vector<TimedPoint>& pts, const CloudDecodeOptions& o, Stamp fallback_ns) {
-  std::stable_sort(pts.begin(), pts.end(), [](const TimedPoint& a, const TimedPoint& b) { return a.t_ns < b.t_ns; });
+  // Drivers mostly publish in firing order: checking is one pass, sorting allocates and merges.
+  const auto earlier = [](const TimedPoint& a, const TimedPoint& b) { return a.t_ns < b.t_ns; };
+  if (!std::is_sorted(pts.begin(), pts.end(), earlier)) std::stable_sort(pts.begin(), pts.end(), earlier);
   LidarScan scan;
   scan.sensor = o.sensor;
   scan.start_ns = pts.empty() ? fallback_ns : pts.front().t_ns;

@@ -24,7 +24,8 @@ double fastAtan2(double y, double x) {
   return y < 0.0 ? -r : r;
 }
 
-double elevationOf(const Eigen::Vector3d& p) { return fastAtan2(p.z(), std::hypot(p.x(), p.y())); }
+// sqrt, not hypot: metres are far from overflow, and hypot guards against it slowly.
+double elevationOf(const Eigen::Vector3d& p) { return fastAtan2(p.z(), std::sqrt(p.x() * p.x() + p.y() * p.y())); }
 
 }  // namespace
 
