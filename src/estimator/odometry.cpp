@@ -7,8 +7,8 @@
 #include <cmath>
 #include <deque>
 #include <unordered_map>
-#include <unordered_set>
 
+#include "mmlio/core/flat_key_index.hpp"
 #include "mmlio/core/log.hpp"
 #include "mmlio/core/so3.hpp"
 #include "mmlio/core/voxel_key.hpp"
@@ -385,7 +385,7 @@ struct Odometry::Impl {
     };
     // A mover is found where part of it entered free space (its leading side); its other returns
     // lie next to those: every feature in a voxel touching a flagged one goes with them.
-    std::unordered_set<std::uint64_t> flagged;
+    FlatKeySet flagged;
     const auto bodyPoint = [&](std::size_t i) { return i < f->edges.size() ? f->edges[i] : f->planes[i - f->edges.size()]; };
     for (std::size_t i = 0; i < moved.size(); ++i)
       if (moved[i]) flagged.insert(key(bodyPoint(i)));
@@ -393,9 +393,9 @@ struct Odometry::Impl {
       for (std::size_t i = 0; i < moved.size(); ++i) {
         const Eigen::Vector3d p = bodyPoint(i);
         for (int n = 0; n < 27 && !moved[i]; ++n)
-          moved[i] = flagged.count(key(p, n % 3 - 1, (n / 3) % 3 - 1, n / 9 - 1)) ? 1 : 0;
+          moved[i] = flagged.contains(key(p, n % 3 - 1, (n / 3) % 3 - 1, n / 9 - 1)) ? 1 : 0;
       }
-    std::unordered_set<std::uint64_t> moved_voxels;
+    FlatKeySet moved_voxels;
     std::size_t index = 0;
     const auto keep = [&](std::vector<Eigen::Vector3d>* pts, std::vector<std::uint8_t>* src) {
       std::size_t k = 0;
@@ -421,7 +421,7 @@ struct Odometry::Impl {
     if (moved_voxels.empty() || out->points_body.empty()) return;
     std::size_t k = 0;
     for (const Point& p : out->points_body) {
-      if (moved_voxels.count(key(p.xyz.cast<double>()))) out->points_dynamic_body.push_back(p);
+      if (moved_voxels.contains(key(p.xyz.cast<double>()))) out->points_dynamic_body.push_back(p);
       else out->points_body[k++] = p;
     }
     out->points_body.resize(k);

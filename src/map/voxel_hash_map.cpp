@@ -15,51 +15,23 @@ namespace {
 
 std::uint64_t pack(int x, int y, int z) { return packVoxelKey(x, y, z); }
 
-// splitmix64 finaliser: neighbouring voxels land in unrelated slots.
-std::size_t slotHash(std::uint64_t h) {
-  h ^= h >> 30;
-  h *= 0xbf58476d1ce4e5b9ULL;
-  h ^= h >> 27;
-  h *= 0x94d049bb133111ebULL;
-  h ^= h >> 31;
-  return static_cast<std::size_t>(h);
-}
-
 }  // namespace
 
 VoxelHashMap::VoxelHashMap(double voxel_m, int max_points_per_voxel)
     : voxel_m_(voxel_m > 0 ? voxel_m : 1.0),
       inv_voxel_(1.0 / voxel_m_),
-      max_points_per_voxel_(std::max(1, max_points_per_voxel)),
-      slots_(1024, kNone) {}
+      max_points_per_voxel_(std::max(1, max_points_per_voxel)) {}
 
 VoxelHashMap::Key VoxelHashMap::keyOf(const Eigen::Vector3d& p) const {
   return Key{static_cast<int>(std::floor(p.x() * inv_voxel_)), static_cast<int>(std::floor(p.y() * inv_voxel_)),
              static_cast<int>(std::floor(p.z() * inv_voxel_))};
 }
 
-std::uint32_t VoxelHashMap::find(std::uint64_t key) const {
-  const std::size_t mask = slots_.size() - 1;
-  for (std::size_t i = slotHash(key) & mask;; i = (i + 1) & mask) {
-    const std::uint32_t v = slots_[i];
-    if (v == kNone || voxels_[v].key == key) return v;
-  }
-}
-
-void VoxelHashMap::insertSlot(std::uint64_t key, std::uint32_t voxel) {
-  const std::size_t mask = slots_.size() - 1;
-  std::size_t i = slotHash(key) & mask;
-  while (slots_[i] != kNone) i = (i + 1) & mask;
-  slots_[i] = voxel;
-}
-
 void VoxelHashMap::rebuildIndex() {
   voxels_.erase(std::remove_if(voxels_.begin(), voxels_.end(), [](const Voxel& v) { return v.points.empty(); }),
                 voxels_.end());
-  std::size_t size = 1024;
-  while (size < 2 * voxels_.size() + 2) size *= 2;
-  slots_.assign(size, kNone);
-  for (std::size_t v = 0; v < voxels_.size(); ++v) insertSlot(voxels_[v].key, static_cast<std::uint32_t>(v));
+  index_.clear();
+  for (std::size_t v = 0; v < voxels_.size(); ++v) index_.insert(voxels_[v].key, static_cast<std::uint32_t>(v));
 }
 
 void VoxelHashMap::add(const std::vector<Eigen::Vector3d>& world_points) {
@@ -67,16 +39,10 @@ void VoxelHashMap::add(const std::vector<Eigen::Vector3d>& world_points) {
     if (!p.allFinite()) continue;
     const Key k = keyOf(p);
     const std::uint64_t key = pack(k.x, k.y, k.z);
-    std::uint32_t v = find(key);
-    if (v == kNone) {
-      if (2 * (voxels_.size() + 1) > slots_.size()) {
-        slots_.assign(slots_.size() * 2, kNone);
-        for (std::size_t i = 0; i < voxels_.size(); ++i) insertSlot(voxels_[i].key, static_cast<std::uint32_t>(i));
-      }
-      v = static_cast<std::uint32_t>(voxels_.size());
+    const auto [v, added] = index_.insert(key, static_cast<std::uint32_t>(voxels_.size()));
+    if (added) {
       voxels_.push_back({key, {}});
       voxels_.back().points.reserve(static_cast<std::size_t>(max_points_per_voxel_));
-      insertSlot(key, v);
     }
     auto& bucket = voxels_[v].points;
     if (static_cast<int>(bucket.size()) >= max_points_per_voxel_) continue;
@@ -198,7 +164,7 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
 
 void VoxelHashMap::clear() {
   voxels_.clear();
-  slots_.assign(1024, kNone);
+  index_.clear();
   num_points_ = 0;
 }
 

@@ -25,7 +25,9 @@ void MapAccumulator::add(const std::vector<Point>& points_body, const Eigen::Iso
       raw_.push_back(q);
       continue;
     }
-    Cell& c = cells_[voxelKey(w, leaf_m_)];
+    const auto [index, added] = index_.insert(voxelKey(w, leaf_m_), static_cast<std::uint32_t>(cells_.size()));
+    if (added) cells_.emplace_back();
+    Cell& c = cells_[index];
     c.sum += w;
     c.intensity += p.intensity;
     ++c.count;
@@ -38,7 +40,7 @@ std::vector<Point> MapAccumulator::points() const {
   if (leaf_m_ <= 0.0) return raw_;
   std::vector<Point> out;
   out.reserve(cells_.size());
-  for (const auto& [key, c] : cells_) {
+  for (const Cell& c : cells_) {
     Point p;
     p.xyz = (c.sum / c.count).cast<float>();
     p.intensity = static_cast<float>(c.intensity / c.count);

@@ -107,7 +107,7 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
   if (cfg_.dynamic_map && !sweep.points_dynamic_body.empty()) dynamic_.add(sweep.points_dynamic_body, T_world_body);
   if (cfg_.clean_map)
     for (const Eigen::Vector3d& p : sweep.moved_world)
-      if (moved_cores_.insert(cellKey(p)).second)
+      if (moved_cores_.insert(cellKey(p)))
         for (int n = 0; n < 27; ++n) moved_cells_.insert(cellKey(p, n % 3 - 1, (n / 3) % 3 - 1, n / 9 - 1));
   // Points go into the current keyframe's submap, in that keyframe's frame. The odometry lists
   // points_body LiDAR by LiDAR, in the order of sweep.lidars.
@@ -160,7 +160,7 @@ void MappingBackend::closeSubmap() {
       };
       std::size_t kept = 0;
       for (const Point& p : pts)
-        if (covered.insert(key(T_world_keyframe * p.xyz.cast<double>())).second) pts[kept++] = p;
+        if (covered.insert(key(T_world_keyframe * p.xyz.cast<double>()))) pts[kept++] = p;
       pts.resize(kept);
     }
     new_voxels += pts.size();
@@ -203,7 +203,7 @@ void MappingBackend::judgeSubmaps(bool all) {
   while (!views_.empty() && views_.begin()->first + after < judged_) views_.erase(views_.begin());
 }
 
-bool MappingBackend::nearMoved(const Eigen::Vector3d& world) const { return moved_cells_.count(cellKey(world)) > 0; }
+bool MappingBackend::nearMoved(const Eigen::Vector3d& world) const { return moved_cells_.contains(cellKey(world)); }
 
 void MappingBackend::removeGhosts(std::size_t submap) {
   // One vote per keyframe (its LiDARs together): seen through by any of them, else seen on.

@@ -8,6 +8,8 @@
 #include <functional>
 #include <vector>
 
+#include "mmlio/core/flat_key_index.hpp"
+
 namespace mmlio::map {
 
 class VoxelHashMap {
@@ -42,16 +44,14 @@ class VoxelHashMap {
     int x, y, z;
   };
   Key keyOf(const Eigen::Vector3d& p) const;
-  // Open addressing over packed keys (linear probing, load <= 1/2): a kNN query looks up to 125
-  // voxels, most of them empty where features are far and sparse, and std::unordered_map's node
-  // chasing was most of the query's cost. Voxels live in `voxels_` in insertion order.
+  // A kNN query looks up to 125 voxels, most of them empty where features are far and sparse:
+  // the index is a FlatKeyIndex. Voxels live in `voxels_` in insertion order.
   struct Voxel {
     std::uint64_t key;
     std::vector<Eigen::Vector3d> points;
   };
-  static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
-  std::uint32_t find(std::uint64_t key) const;
-  void insertSlot(std::uint64_t key, std::uint32_t voxel);
+  static constexpr std::uint32_t kNone = FlatKeyIndex::kNone;
+  std::uint32_t find(std::uint64_t key) const { return index_.find(key); }
   void rebuildIndex();  // after voxels were removed (compacts them)
 
   double voxel_m_;
@@ -59,7 +59,7 @@ class VoxelHashMap {
   int max_points_per_voxel_;
   std::size_t num_points_ = 0;
   std::vector<Voxel> voxels_;
-  std::vector<std::uint32_t> slots_;  // voxel index or kNone; size a power of two
+  FlatKeyIndex index_;  // packed voxel key -> index into voxels_
 };
 
 }  // namespace mmlio::map

@@ -3,9 +3,9 @@
 // with the mapped surface, not with the number of sweeps. Leaf 0 keeps every point.
 #include <Eigen/Geometry>
 #include <cstdint>
-#include <unordered_map>
 #include <vector>
 
+#include "mmlio/core/flat_key_index.hpp"
 #include "mmlio/core/types.hpp"
 
 namespace mmlio::pipeline {
@@ -16,7 +16,7 @@ class MapAccumulator {
   /// Adds body-frame points seen from pose T_world_body.
   void add(const std::vector<Point>& points_body, const Eigen::Isometry3d& T_world_body);
   std::size_t size() const;
-  /// One point per voxel (centroid, mean intensity).
+  /// One point per voxel (centroid, mean intensity), in the order the voxels were first hit.
   std::vector<Point> points() const;
 
  private:
@@ -26,7 +26,8 @@ class MapAccumulator {
     std::uint32_t count = 0;
   };
   double leaf_m_;
-  std::unordered_map<std::uint64_t, Cell> cells_;
+  std::vector<Cell> cells_;  // in the order their voxels were first hit
+  FlatKeyIndex index_;       // voxel key -> cell
   std::vector<Point> raw_;  // leaf 0
 };
 

@@ -6,12 +6,12 @@
 #include <map>
 #include <memory>
 #include <string>
-#include <unordered_set>
 #include <vector>
 
 #include "mmlio/backend/loop_closer.hpp"
 #include "mmlio/backend/mapping_config.hpp"
 #include "mmlio/backend/pose_graph.hpp"
+#include "mmlio/core/flat_key_index.hpp"
 #include "mmlio/estimator/odometry.hpp"
 #include "mmlio/pipeline/json.hpp"
 #include "mmlio/pipeline/map_accumulator.hpp"
@@ -71,7 +71,7 @@ class MappingBackend {
   using Submap = std::map<std::string, std::vector<Point>>;
   std::vector<Submap> submaps_;
   std::map<std::string, MapAccumulator> open_;
-  std::map<std::string, std::unordered_set<std::uint64_t>> covered_;  // world voxels held, per LiDAR key
+  std::map<std::string, FlatKeySet> covered_;  // world voxels held, per LiDAR key
   void closeSubmap();
   std::vector<Point> mergedMap(const std::string* only_lidar) const;
   void judgeSubmaps(bool all);
@@ -81,7 +81,7 @@ class MappingBackend {
   std::size_t judged_ = 0;  // submaps [0, judged_) are judged
   // World cells (and their neighbours) where the odometry saw something move: only map points in
   // them are judged (nearly all of a map is static and never near a mover).
-  std::unordered_set<std::uint64_t> moved_cells_, moved_cores_;
+  FlatKeySet moved_cells_, moved_cores_;
   bool nearMoved(const Eigen::Vector3d& world) const;
   GhostRemoval ghosts_;
   MapAccumulator dynamic_;  // world frame, at the poses of the moment (map_leaf_m)
