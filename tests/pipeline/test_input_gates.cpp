@@ -3,11 +3,14 @@
 // unusable output folder is refused before any work.
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <thread>
 
 #include "mmlio/eval/evaluation.hpp"
 #include "mmlio/core/error.hpp"
@@ -195,6 +198,39 @@ std::string officeBag(const sim::Simulator& sim, const std::string& name, const 
   const std::string path = (std::filesystem::temp_directory_path() / name).string();
   testing::writeSimBag(sim, path, keep_imu);
   return path;
+}
+
+TEST(RunBag, AStopRequestEndsTheRunWithWhatWasComputedWrittenAndFlagged) {
+  // What Ctrl-C / SIGTERM do to `mmlio run`: the handler sets the stop flag; here a thread sets it
+  // once the run has tracked for a while.
+  const sim::Simulator sim = office(12.0);
+  RunOptions options;
+  options.config = testing::simRigConfig(sim);
+  options.progress = false;
+  options.out_dir = (std::filesystem::temp_directory_path() / "mmlio_interrupted_out").string();
+  options.bag_path = officeBag(sim, "mmlio_interrupted.bag", [](const ImuSample&) { return true; });
+  std::atomic<bool> stop{false};
+  options.stop = &stop;
+  std::thread stopper([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+    stop = true;
+  });
+  const RunResult r = runBag(options);
+  stopper.join();
+  EXPECT_TRUE(r.interrupted);
+  EXPECT_EQ(r.untrusted, "interrupted");
+  EXPECT_GT(r.trajectory.size(), 0u);
+  EXPECT_LT(r.trajectory.size(), 110u);  // 12 s of sweeps would be ~110
+  std::ifstream written(options.out_dir + "/report.json");
+  const std::string text((std::istreambuf_iterator<char>(written)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"status\": \"interrupted\""), std::string::npos) << text.substr(0, 200);
+  std::ifstream tum(options.out_dir + "/trajectory.tum");
+  std::size_t lines = 0;
+  for (std::string line; std::getline(tum, line);) lines += !line.empty() && line[0] != '#';
+  EXPECT_EQ(lines, r.trajectory.size());
+  EXPECT_TRUE(std::filesystem::exists(options.out_dir + "/map.pcd"));
+  std::filesystem::remove_all(options.out_dir);
+  std::filesystem::remove(options.bag_path);
 }
 
 TEST(RunBag, OutputsAreFlaggedUntrustedWhenTooManySweepsAreDegraded) {
