@@ -31,7 +31,7 @@ double elevationOf(const Eigen::Vector3d& p) { return fastAtan2(p.z(), std::sqrt
 
 RangeImage::RangeImage(const std::vector<Point>& points, const RangeImageConfig& config) : cfg_(config) {
   inv_res_ = 1.0 / std::max(0.05, cfg_.resolution_deg);
-  cols_ = std::max(1, static_cast<int>(std::ceil(360.0 * inv_res_)));
+  circle_cols_ = std::max(1, static_cast<int>(std::ceil(360.0 * inv_res_)));
   // One pass computes every return's pixel (rows relative to row 0 until the image's rows are known).
   struct Cell {
     int col, row;
@@ -54,15 +54,32 @@ RangeImage::RangeImage(const std::vector<Point>& points, const RangeImageConfig&
   if (cells.empty()) return;
   row0_ = lo;
   rows_ = hi - lo + 1;
+  // Keep the arc of columns outside the widest circular run of empty ones; a pixel outside it reads
+  // as empty, as it would in the full image.
+  thread_local std::vector<char> used;
+  used.assign(static_cast<std::size_t>(circle_cols_), 0);
+  for (const Cell& c : cells) used[static_cast<std::size_t>(c.col)] = 1;
+  int gap = 0, widest = 0, widest_end = 0;
+  for (int i = 0; i < 2 * circle_cols_; ++i) {
+    gap = used[static_cast<std::size_t>(i % circle_cols_)] ? 0 : std::min(gap + 1, circle_cols_);
+    if (gap > widest) {
+      widest = gap;
+      widest_end = i % circle_cols_;
+    }
+  }
+  cols_ = circle_cols_ - widest;
+  col0_ = widest == 0 ? 0 : (widest_end + 1) % circle_cols_;
   ranges_.assign(static_cast<std::size_t>(rows_) * static_cast<std::size_t>(cols_), 0);
   for (const Cell& c : cells) {
-    std::uint16_t& cell = ranges_[static_cast<std::size_t>(c.row - lo) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(c.col)];
+    const int x = (c.col - col0_ + circle_cols_) % circle_cols_;
+    std::uint16_t& cell = ranges_[static_cast<std::size_t>(c.row - lo) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(x)];
     if (cell == 0 || c.cm < cell) cell = c.cm;
   }
 }
 
 void RangeImage::pixelOf(const Eigen::Vector3d& p, int* col, int* row) const {
-  *col = std::clamp(static_cast<int>(std::floor((fastAtan2(p.y(), p.x()) * kRadToDeg + 180.0) * inv_res_)), 0, cols_ - 1);
+  *col = std::clamp(static_cast<int>(std::floor((fastAtan2(p.y(), p.x()) * kRadToDeg + 180.0) * inv_res_)), 0,
+                    circle_cols_ - 1);
   *row = rowOf(elevationOf(p), inv_res_) - row0_;
 }
 
@@ -81,8 +98,8 @@ Visibility RangeImage::classify(const Eigen::Vector3d& p) const {
     if (y < 0 || y >= rows_) continue;
     const std::uint16_t* line = &ranges_[static_cast<std::size_t>(y) * static_cast<std::size_t>(cols_)];
     for (int dc = -cfg_.window_cols; dc <= cfg_.window_cols; ++dc) {
-      const int x = (col + dc + cols_) % cols_;
-      if (line[x] == 0) continue;
+      const int x = (col + dc - col0_ + 2 * circle_cols_) % circle_cols_;
+      if (x >= cols_ || line[x] == 0) continue;
       const double m = 0.01 * line[x];
       nearest = std::min(nearest, m);
       // Seen ON: a return at the point's range in its own pixel or the ones just above and below.

@@ -90,3 +90,31 @@ TEST(RangeImage, NoReturnPointsAndNonFiniteOnesAreIgnored) {
 }
 
 }  // namespace mmlio::map
+
+namespace mmlio::map {
+
+TEST(RangeImage, ASolidStateViewKeepsOnlyItsArcAndJudgesAsTheFullCircleWould) {
+  // The same 60 deg wall ahead and behind (its arc then straddles +-180 deg azimuth): the image
+  // holds about a sixth of a full turn's pixels, and every query, near the arc's edges and across
+  // the seam, gets the same answer rotated.
+  const std::vector<Point> ahead = wallAhead();
+  std::vector<Point> behind = ahead;
+  const Eigen::Matrix3f turn = Eigen::AngleAxisf(static_cast<float>(M_PI), Eigen::Vector3f::UnitZ()).toRotationMatrix();
+  for (Point& p : behind) p.xyz = turn * p.xyz;
+  const RangeImage front(ahead, RangeImageConfig{}), back(behind, RangeImageConfig{});
+  const double res = RangeImageConfig{}.resolution_deg;
+  const auto full_turn_bytes = static_cast<std::size_t>(360.0 / res * (20.0 / res + 1) * sizeof(std::uint16_t));
+  EXPECT_LT(front.memoryBytes(), full_turn_bytes / 4);  // the wall's 60 of 360 deg, and a pixel or so
+  EXPECT_EQ(front.memoryBytes(), back.memoryBytes());
+  int free = 0;
+  for (double a = -40; a <= 40; a += 0.25)
+    for (double e : {-12.0, -9.9, 0.0, 5.0, 10.1})
+      for (double r : {3.0, 9.9, 10.0, 13.0}) {
+        const Visibility v = front.classify(dir(r, a, e));
+        ASSERT_EQ(v, back.classify(turn.cast<double>() * dir(r, a, e))) << "azimuth " << a << " elevation " << e;
+        free += v == Visibility::kFree;
+      }
+  EXPECT_GT(free, 100);
+}
+
+}  // namespace mmlio::map

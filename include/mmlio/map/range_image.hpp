@@ -44,12 +44,15 @@ class RangeImage {
   std::size_t memoryBytes() const { return ranges_.size() * sizeof(ranges_[0]); }
 
  private:
-  // For a finite, non-zero p; row relative to row0_, may lie outside the image.
+  // For a finite, non-zero p; col on the full circle, row relative to row0_ (may lie outside the image).
   void pixelOf(const Eigen::Vector3d& p, int* col, int* row) const;
 
   RangeImageConfig cfg_;
   double inv_res_ = 1.0;
+  int circle_cols_ = 0;  // columns of a full turn
   int cols_ = 0, rows_ = 0, row0_ = 0;
+  int col0_ = 0;  // the stored columns are col0_ .. col0_ + cols_ - 1 around the circle: the azimuth
+                  // arc with returns (a solid-state LiDAR's 82 deg, not 360)
   // rows_ x cols_, nearest return in cm (0 = none): half the memory of floats, far below the margins
   // (keyframes keep their images for the map's ghost removal).
   std::vector<std::uint16_t> ranges_;
