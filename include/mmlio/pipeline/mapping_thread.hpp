@@ -46,6 +46,8 @@ class MappingThread {
 
   MappingBackend backend_;
   std::size_t capacity_;
+  static constexpr std::size_t kTrimEveryKeyframes = 10;
+  std::size_t keyframes_ = 0;  // seen by the worker
   std::deque<estimator::SweepResult> queue_;
   std::mutex mutex_;                   // the queue
   mutable std::mutex backend_mutex_;   // the back end and its timing
