@@ -251,10 +251,10 @@ void MappingBackend::removeGhosts(std::size_t submap) {
         };
         int free = 0, hit = 0;
         // Nearly every point is static and never seen through: half of the views shows that
-        // (a ghost is seen through by most views once its mover has gone); only points some view
-        // sees through are asked to all.
+        // (a ghost is seen through by most views once its mover has gone); points some view sees
+        // through, and points that half sees on at most once (it cannot tell), are asked to all.
         vote(2, &free, &hit);
-        if (free > 0) {
+        if (free > 0 || hit <= 1) {
           free = hit = 0;
           vote(1, &free, &hit);
         }
