@@ -10,10 +10,12 @@
 #include "mmlio/core/voxel_key.hpp"
 
 namespace mmlio::pipeline {
-
 namespace {
 
 constexpr double kMovedCellM = 0.5;
+// A cell the odometry reported this many moved-in returns in held a mover (a walker leaves dozens);
+// fewer are the odd false detection on a static surface, which must not cost it points.
+constexpr std::uint32_t kMinMoverReturns = 8;
 
 std::uint64_t cellKey(const Eigen::Vector3d& p, int dx = 0, int dy = 0, int dz = 0) {
   const auto idx = [](double v) { return static_cast<std::int64_t>(std::floor(v / kMovedCellM)); };
@@ -106,9 +108,13 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
   }
   if (cfg_.dynamic_map && !sweep.points_dynamic_body.empty()) dynamic_.add(sweep.points_dynamic_body, T_world_body);
   if (cfg_.clean_map)
-    for (const Eigen::Vector3d& p : sweep.moved_world)
+    for (const Eigen::Vector3d& p : sweep.moved_world) {
+      const auto [c, added] = mover_index_.insert(cellKey(p), static_cast<std::uint32_t>(mover_returns_.size()));
+      if (added) mover_returns_.push_back(0);
+      ++mover_returns_[c];
       if (moved_cores_.insert(cellKey(p)))
         for (int n = 0; n < 27; ++n) moved_cells_.insert(cellKey(p, n % 3 - 1, (n / 3) % 3 - 1, n / 9 - 1));
+    }
   // Points go into the current keyframe's submap, in that keyframe's frame. The odometry lists
   // points_body LiDAR by LiDAR, in the order of sweep.lidars.
   const std::size_t stride = static_cast<std::size_t>(std::max(1, cfg_.map_point_stride));
@@ -205,6 +211,11 @@ void MappingBackend::judgeSubmaps(bool all) {
 
 bool MappingBackend::nearMoved(const Eigen::Vector3d& world) const { return moved_cells_.contains(cellKey(world)); }
 
+std::uint32_t MappingBackend::moverReturns(const Eigen::Vector3d& world) const {
+  const std::uint32_t c = mover_index_.find(cellKey(world));
+  return c == FlatKeyIndex::kNone ? 0 : mover_returns_[c];
+}
+
 void MappingBackend::removeGhosts(std::size_t submap) {
   // One vote per keyframe (its LiDARs together): seen through by any of them, else seen on.
   struct Eye {
@@ -263,7 +274,12 @@ void MappingBackend::removeGhosts(std::size_t submap) {
         // where people pace, later views also see them (or another) back on the same spot; a
         // static surface is seen through only by the rare view whose pose or mixed pixel is off.
         // At least two views, so one such view alone never removes anything.
-        ghost[i] = free >= 2 && 2 * free >= hit;
+        // Or: it stands where the odometry saw something move in (space earlier views saw empty;
+        // kMinMoverReturns returns, not the odd false detection) and no keyframe's view but at
+        // most its own sees it there: nothing confirms a surface in
+        // space known to have been free (a walker seen from far off in a sweep between keyframes,
+        // then hidden or out of view).
+        ghost[i] = (free >= 2 && 2 * free >= hit) || (free == 0 && hit <= 1 && moverReturns(p) >= kMinMoverReturns);
       }
     });
     std::vector<Point> removed;

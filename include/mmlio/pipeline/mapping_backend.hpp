@@ -82,7 +82,11 @@ class MappingBackend {
   // World cells (and their neighbours) where the odometry saw something move: only map points in
   // them are judged (nearly all of a map is static and never near a mover).
   FlatKeySet moved_cells_, moved_cores_;
+  FlatKeyIndex mover_index_;                // cell -> index into mover_returns_
+  std::vector<std::uint32_t> mover_returns_;  // moved-in returns the odometry saw per cell
   bool nearMoved(const Eigen::Vector3d& world) const;
+  /// How many moved-in returns the odometry reported in world's cell.
+  std::uint32_t moverReturns(const Eigen::Vector3d& world) const;
   GhostRemoval ghosts_;
   MapAccumulator dynamic_;  // world frame, at the poses of the moment (map_leaf_m)
   Trajectory odometry_;
