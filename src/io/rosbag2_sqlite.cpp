@@ -4,6 +4,7 @@
 #include <sqlite3.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -106,9 +107,11 @@ class Sqlite3Bag final : public Ros2Bag {
       const std::size_t got = std::fread(head, 1, 4, f);
       std::fclose(f);
       if (isZstdFrame(head, got)) {
-        path =
-            (fs::temp_directory_path() / ("mmlio-" + std::to_string(::getpid()) + "-" + fs::path(file).stem().string()))
-                .string();
+        // One copy per open bag: `calibration: auto` and the run may hold the same bag open at once.
+        static std::atomic<unsigned> copies{0};
+        path = (fs::temp_directory_path() / ("mmlio-" + std::to_string(::getpid()) + "-" + std::to_string(copies++) +
+                                             "-" + fs::path(file).stem().string()))
+                   .string();
         temporaries_.push_back(path);
         log::info("decompressing ", file, " to ", path);
         zstdDecompressFile(file, path);
