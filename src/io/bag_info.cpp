@@ -5,7 +5,6 @@
 #include <rosbag/view.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <map>
 #include <set>
@@ -69,10 +68,19 @@ BagInfo describeRos2Bag(const std::string& path) {
     if (r.messages >= 2 && r.end_ns > r.begin_ns)
       t.rate_hz = static_cast<double>(r.messages - 1) / toSec(r.end_ns - r.begin_ns);
     const detail::Ros2Type type = detail::ros2Type(r.type);
-    if (type != detail::Ros2Type::kOther && r.messages > 0) {
+    if (type == detail::Ros2Type::kImu && r.messages > 0 && info.imu_unit_guess.empty()) {
+      bag->restart({i});
+      const auto next = [&](sensor_msgs::Imu* out) {
+        detail::Ros2Message m;
+        if (!bag->next(&m)) return false;
+        *out = detail::decodeImuCdr(m.data);
+        return true;
+      };
+      info.imu_unit_guess = imuUnitFromMeanAcc(meanImuAccNorm(next, kSampledMessages));
+    } else if (type != detail::Ros2Type::kOther && type != detail::Ros2Type::kImu && r.messages > 0) {
       bag->restart({i});
       detail::Ros2Message m;
-      double points = 0, acc = 0;
+      double points = 0;
       int n = 0;
       while (n < kSampledMessages && bag->next(&m)) {
         try {
@@ -80,12 +88,9 @@ BagInfo describeRos2Bag(const std::string& path) {
             const auto c = detail::decodePointCloud2Cdr(m.data);
             if (t.fields.empty()) t.fields = pointFieldDescriptions(c);
             points += static_cast<double>(c.width) * c.height;
-          } else if (type == detail::Ros2Type::kLivox) {
+          } else {
             if (t.fields.empty()) t.fields = kLivoxFields;
             points += static_cast<double>(detail::decodeLivoxCdr(m.data).points.size());
-          } else {
-            const auto& a = detail::decodeImuCdr(m.data).linear_acceleration;
-            acc += std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z);
           }
           ++n;
         } catch (const std::exception& e) {
@@ -93,9 +98,7 @@ BagInfo describeRos2Bag(const std::string& path) {
           break;
         }
       }
-      if (n > 0 && type != detail::Ros2Type::kImu) t.mean_points = points / n;
-      if (n > 0 && type == detail::Ros2Type::kImu && info.imu_unit_guess.empty())
-        info.imu_unit_guess = imuUnitFromMeanAcc(acc / n);
+      if (n > 0) t.mean_points = points / n;
     }
     info.topics.push_back(std::move(t));
   }

@@ -339,7 +339,6 @@ bool BagSource::Impl::nextRos2(SensorEvent* event) {
     current_ns = m.time_ns;
     if (decodeMessage(Ros2Msg{m, ros2->topics()[m.topic]}, event)) return true;
   }
-  truncated = truncated || ros2->truncated();
   return false;
 }
 

@@ -240,7 +240,7 @@ class McapBag final : public Ros2Bag {
     f.get<std::uint64_t>();
     u->uncompressed_size = f.get<std::uint64_t>();
     u->crc = f.get<std::uint32_t>();
-    const auto name_len = f.get<std::uint32_t>();
+    const std::uint64_t name_len = f.get<std::uint32_t>();
     if (32 + name_len + 8 > len) throw Error("chunk header runs past the chunk");
     const auto rest = readAt(content + 32, name_len + 8);
     u->compression.assign(reinterpret_cast<const char*>(rest.data()), name_len);
@@ -323,17 +323,9 @@ class McapBag final : public Ros2Bag {
     Unit u;
     u.chunk = true;
     try {
-      const auto rec = readAt(content, len);
-      Fields f(rec.data(), rec.size());
-      f.get<std::uint64_t>();  // message start and end time: taken from the messages themselves
-      f.get<std::uint64_t>();
-      u.uncompressed_size = f.get<std::uint64_t>();
-      u.crc = f.get<std::uint32_t>();
-      u.compression = f.string();
-      const auto records = f.bytes64();
-      u.offset = content + (records.first - rec.data());
-      u.size = records.second;
-      const auto data = decompress(u, records.first, records.second);
+      chunkHeader(content, len, &u);
+      const auto records = readAt(u.offset, u.size);
+      const auto data = decompress(u, records.data(), records.size());
       Stamp start = std::numeric_limits<Stamp>::max();
       const bool intact =
           forEachRecord(data.data(), data.size(), [&](std::uint8_t op, const std::uint8_t* p, std::size_t n) {

@@ -140,7 +140,7 @@ Ros2Format ros2Format(const std::string& path) {
 std::unique_ptr<Ros2Bag> openRos2Bag(const std::string& path) {
   switch (ros2Format(path)) {
     case Ros2Format::kSqlite3:
-      return openSqlite3(path, {path});
+      return openSqlite3({path});
     case Ros2Format::kMcap:
       return openMcap(path);
     case Ros2Format::kFolder: {
@@ -154,7 +154,7 @@ std::unique_ptr<Ros2Bag> openRos2Bag(const std::string& path) {
       }
       if (storage != "sqlite3")
         throw Error(path + ": rosbag2 storage '" + storage + "' is not read (sqlite3 and mcap are)");
-      return openSqlite3(path, files);
+      return openSqlite3(files);
     }
     case Ros2Format::kNone:
       break;

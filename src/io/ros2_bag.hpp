@@ -60,6 +60,6 @@ class Ros2Bag {
 std::unique_ptr<Ros2Bag> openRos2Bag(const std::string& path);
 /// The readers behind openRos2Bag: one .mcap file; .db3 (or .db3.zstd) files of one bag.
 std::unique_ptr<Ros2Bag> openMcap(const std::string& path);
-std::unique_ptr<Ros2Bag> openSqlite3(const std::string& where, const std::vector<std::string>& files);
+std::unique_ptr<Ros2Bag> openSqlite3(const std::vector<std::string>& files);
 
 }  // namespace mmlio::io::detail

@@ -38,7 +38,7 @@ struct Database {
 
 class Sqlite3Bag final : public Ros2Bag {
  public:
-  Sqlite3Bag(const std::string& where, const std::vector<std::string>& files) : where_(where) {
+  explicit Sqlite3Bag(const std::vector<std::string>& files) {
     for (const std::string& f : files) openDatabase(f);
     format_ = "ROS 2 sqlite3 (" + std::to_string(files.size()) + (files.size() == 1 ? " file" : " files") +
               (compressed_files_ ? ", zstd per file" : "") + ")";
@@ -178,7 +178,6 @@ class Sqlite3Bag final : public Ros2Bag {
     if (damaged_++ == 0) log::warn("stopped reading ", d.path, " early: ", why);
   }
 
-  std::string where_;
   std::vector<std::unique_ptr<Database>> dbs_;
   std::vector<std::string> temporaries_;
   std::size_t compressed_files_ = 0;
@@ -186,8 +185,8 @@ class Sqlite3Bag final : public Ros2Bag {
 
 }  // namespace
 
-std::unique_ptr<Ros2Bag> openSqlite3(const std::string& where, const std::vector<std::string>& files) {
-  return std::make_unique<Sqlite3Bag>(where, files);
+std::unique_ptr<Ros2Bag> openSqlite3(const std::vector<std::string>& files) {
+  return std::make_unique<Sqlite3Bag>(files);
 }
 
 }  // namespace mmlio::io::detail

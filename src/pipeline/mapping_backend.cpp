@@ -110,10 +110,11 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
   if (cfg_.clean_map)
     for (const Eigen::Vector3d& p : sweep.moved_world) {
       const auto [c, added] = mover_index_.insert(cellKey(p), static_cast<std::uint32_t>(mover_returns_.size()));
-      if (added) mover_returns_.push_back(0);
-      ++mover_returns_[c];
-      if (moved_cores_.insert(cellKey(p)))
+      if (added) {  // a cell first seen with a mover: it and its neighbours are judged
+        mover_returns_.push_back(0);
         for (int n = 0; n < 27; ++n) moved_cells_.insert(cellKey(p, n % 3 - 1, (n / 3) % 3 - 1, n / 9 - 1));
+      }
+      ++mover_returns_[c];
     }
   // Points go into the current keyframe's submap, in that keyframe's frame. The odometry lists
   // points_body LiDAR by LiDAR, in the order of sweep.lidars.
@@ -276,9 +277,8 @@ void MappingBackend::removeGhosts(std::size_t submap) {
         // At least two views, so one such view alone never removes anything.
         // Or: it stands where the odometry saw something move in (space earlier views saw empty;
         // kMinMoverReturns returns, not the odd false detection) and no keyframe's view but at
-        // most its own sees it there: nothing confirms a surface in
-        // space known to have been free (a walker seen from far off in a sweep between keyframes,
-        // then hidden or out of view).
+        // most its own sees it there: nothing confirms a surface in space known to have been free
+        // (a walker seen from far off in a sweep between keyframes, then hidden or out of view).
         ghost[i] = (free >= 2 && 2 * free >= hit) || (free == 0 && hit <= 1 && moverReturns(p) >= kMinMoverReturns);
       }
     });

@@ -81,8 +81,8 @@ class MappingBackend {
   std::size_t judged_ = 0;  // submaps [0, judged_) are judged
   // World cells (and their neighbours) where the odometry saw something move: only map points in
   // them are judged (nearly all of a map is static and never near a mover).
-  FlatKeySet moved_cells_, moved_cores_;
-  FlatKeyIndex mover_index_;                // cell -> index into mover_returns_
+  FlatKeySet moved_cells_;
+  FlatKeyIndex mover_index_;                  // cell with a mover -> index into mover_returns_
   std::vector<std::uint32_t> mover_returns_;  // moved-in returns the odometry saw per cell
   bool nearMoved(const Eigen::Vector3d& world) const;
   /// How many moved-in returns the odometry reported in world's cell.
