@@ -2,8 +2,7 @@
 
 #include <cmath>
 #include <cstdint>
-#include <unordered_map>
-
+#include "mmlio/core/flat_key_index.hpp"
 #include "mmlio/core/voxel_key.hpp"
 
 namespace mmlio::lidar {
@@ -25,18 +24,18 @@ struct Accumulator {
 std::vector<Point> voxelDownsample(const std::vector<Point>& pts, double leaf_m) {
   if (leaf_m <= 0.0) return pts;
   const double inv_leaf = 1.0 / leaf_m;
-  std::unordered_map<std::uint64_t, std::size_t> slot_of_key;
-  slot_of_key.reserve(pts.size());
+  FlatKeyIndex slot_of_key;
   std::vector<Point> out;
   std::vector<Accumulator> acc;
   for (const Point& p : pts) {
     if (!p.xyz.allFinite()) continue;
-    const auto [it, inserted] = slot_of_key.try_emplace(voxelKey(p.xyz, inv_leaf), out.size());
+    const auto [slot, inserted] =
+        slot_of_key.insert(voxelKey(p.xyz, inv_leaf), static_cast<std::uint32_t>(out.size()));
     if (inserted) {
       out.push_back(p);
       acc.emplace_back();
     }
-    Accumulator& a = acc[it->second];
+    Accumulator& a = acc[slot];
     a.sum += p.xyz.cast<double>();
     a.intensity_sum += p.intensity;
     ++a.count;

@@ -11,12 +11,6 @@
 
 namespace mmlio::map {
 
-namespace {
-
-std::uint64_t pack(int x, int y, int z) { return packVoxelKey(x, y, z); }
-
-}  // namespace
-
 VoxelHashMap::VoxelHashMap(double voxel_m, int max_points_per_voxel)
     : voxel_m_(voxel_m > 0 ? voxel_m : 1.0),
       inv_voxel_(1.0 / voxel_m_),
@@ -27,23 +21,43 @@ VoxelHashMap::Key VoxelHashMap::keyOf(const Eigen::Vector3d& p) const {
              static_cast<int>(std::floor(p.z() * inv_voxel_))};
 }
 
+std::uint64_t VoxelHashMap::brickKey(const Key& k) {
+  // Arithmetic shifts: floor division by the brick size for negative keys too.
+  return packVoxelKey(k.x >> kBrickShift, k.y >> kBrickShift, k.z >> kBrickShift);
+}
+
+std::pair<std::uint32_t, bool> VoxelHashMap::findOrAdd(const Key& k) {
+  const auto [b, new_brick] = brick_index_.insert(brickKey(k), static_cast<std::uint32_t>(bricks_.size()));
+  if (new_brick) {
+    bricks_.emplace_back();
+    bricks_.back().fill(kNone);
+  }
+  std::uint32_t& slot = bricks_[b][slotInBrick(k)];
+  if (slot != kNone) return {slot, false};
+  slot = static_cast<std::uint32_t>(voxels_.size());
+  voxels_.push_back({k, {}});
+  return {slot, true};
+}
+
 void VoxelHashMap::rebuildIndex() {
-  voxels_.erase(std::remove_if(voxels_.begin(), voxels_.end(), [](const Voxel& v) { return v.points.empty(); }),
-                voxels_.end());
-  index_.clear();
-  for (std::size_t v = 0; v < voxels_.size(); ++v) index_.insert(voxels_[v].key, static_cast<std::uint32_t>(v));
+  std::vector<Voxel> kept;
+  kept.reserve(voxels_.size());
+  for (Voxel& v : voxels_)
+    if (!v.points.empty()) kept.push_back(std::move(v));
+  voxels_.clear();
+  bricks_.clear();
+  brick_index_.clear();
+  for (Voxel& v : kept) {
+    findOrAdd(v.key);
+    voxels_.back().points = std::move(v.points);
+  }
 }
 
 void VoxelHashMap::add(const std::vector<Eigen::Vector3d>& world_points) {
   for (const auto& p : world_points) {
     if (!p.allFinite()) continue;
-    const Key k = keyOf(p);
-    const std::uint64_t key = pack(k.x, k.y, k.z);
-    const auto [v, added] = index_.insert(key, static_cast<std::uint32_t>(voxels_.size()));
-    if (added) {
-      voxels_.push_back({key, {}});
-      voxels_.back().points.reserve(static_cast<std::size_t>(max_points_per_voxel_));
-    }
+    const auto [v, added] = findOrAdd(keyOf(p));
+    if (added) voxels_.back().points.reserve(static_cast<std::size_t>(max_points_per_voxel_));
     auto& bucket = voxels_[v].points;
     if (static_cast<int>(bucket.size()) >= max_points_per_voxel_) continue;
     bucket.push_back(p);
@@ -145,7 +159,7 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
             // max_dist_m) is not looked up: the hash lookups are most of the cost of a query.
             const double gap2 = gxy + axisGap(q.z(), c.z, dz);
             if (gap2 > max_d2 || (static_cast<int>(best.size()) == k && gap2 >= best.front().first)) continue;
-            const std::uint32_t v = find(pack(c.x + dx, c.y + dy, c.z + dz));
+            const std::uint32_t v = find(Key{c.x + dx, c.y + dy, c.z + dz});
             if (v != kNone) visit(voxels_[v].points);
           }
         }
@@ -164,7 +178,8 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
 
 void VoxelHashMap::clear() {
   voxels_.clear();
-  index_.clear();
+  bricks_.clear();
+  brick_index_.clear();
   num_points_ = 0;
 }
 

@@ -3,9 +3,11 @@
 // bounded by the occupied volume; kNN scans the voxels around the query ring by ring.
 
 #include <Eigen/Core>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <utility>
 #include <vector>
 
 #include "mmlio/core/flat_key_index.hpp"
@@ -44,14 +46,28 @@ class VoxelHashMap {
     int x, y, z;
   };
   Key keyOf(const Eigen::Vector3d& p) const;
-  // A kNN query looks up to 125 voxels, most of them empty where features are far and sparse:
-  // the index is a FlatKeyIndex. Voxels live in `voxels_` in insertion order.
+  // A kNN query looks up 27 to 125 neighbouring voxels, most of them empty where features are far
+  // and sparse. Voxels are indexed in bricks of 4x4x4: one hash lookup finds a brick, whose 64
+  // slots are an array, so a query's neighbourhood costs a few hash lookups (each a likely cache
+  // miss) instead of one per voxel. Voxels live in `voxels_` in insertion order.
   struct Voxel {
-    std::uint64_t key;
+    Key key;
     std::vector<Eigen::Vector3d> points;
   };
+  static constexpr int kBrickShift = 2;  // bricks of 4 voxels a side
+  static constexpr int kBrickMask = (1 << kBrickShift) - 1;
+  using Brick = std::array<std::uint32_t, 1 << (3 * kBrickShift)>;  // voxel index per slot, or kNone
   static constexpr std::uint32_t kNone = FlatKeyIndex::kNone;
-  std::uint32_t find(std::uint64_t key) const { return index_.find(key); }
+  static std::uint64_t brickKey(const Key& k);
+  static int slotInBrick(const Key& k) {
+    return (k.x & kBrickMask) | (k.y & kBrickMask) << kBrickShift | (k.z & kBrickMask) << (2 * kBrickShift);
+  }
+  std::uint32_t find(const Key& k) const {
+    const std::uint32_t b = brick_index_.find(brickKey(k));
+    return b == kNone ? kNone : bricks_[b][slotInBrick(k)];
+  }
+  /// The voxel at k: its index, and whether it was created.
+  std::pair<std::uint32_t, bool> findOrAdd(const Key& k);
   void rebuildIndex();  // after voxels were removed (compacts them)
 
   double voxel_m_;
@@ -59,7 +75,8 @@ class VoxelHashMap {
   int max_points_per_voxel_;
   std::size_t num_points_ = 0;
   std::vector<Voxel> voxels_;
-  FlatKeyIndex index_;  // packed voxel key -> index into voxels_
+  std::vector<Brick> bricks_;
+  FlatKeyIndex brick_index_;  // packed brick key -> index into bricks_
 };
 
 }  // namespace mmlio::map
