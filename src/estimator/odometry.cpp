@@ -12,6 +12,7 @@
 #include "mmlio/core/log.hpp"
 #include "mmlio/core/so3.hpp"
 #include "mmlio/core/voxel_key.hpp"
+#include "mmlio/estimator/feature_budget.hpp"
 #include "mmlio/estimator/imu_factor.hpp"
 #include "mmlio/estimator/lidar_factors.hpp"
 #include "mmlio/estimator/sliding_window.hpp"
@@ -212,10 +213,6 @@ struct Odometry::Impl {
     };
     toVec(lidar::voxelDownsample(edges, cfg.edge_voxel_m), &f.edges, &f.edge_source);
     toVec(lidar::voxelDownsample(planes, cfg.plane_voxel_m), &f.planes, &f.plane_source);
-    // The map keeps the matched resolution: denser map clouds (0.1-0.2 m) were measured to fit
-    // noisier local planes (office HVI ATE 1.2 -> 1.8-2.0 cm) although they are faster to search.
-    f.map_edges = f.edges;
-    f.map_planes = f.planes;
     return f;
   }
 
@@ -361,13 +358,17 @@ struct Odometry::Impl {
     src->resize(k);
   }
 
+  FeatureBudget registrationBudget() const {
+    const auto count = [](int n) { return static_cast<std::size_t>(std::max(0, n)); };
+    return {count(cfg.registration_max_edges), count(cfg.registration_max_planes), cfg.edge_voxel_m,
+            cfg.plane_voxel_m};
+  }
+
   /// Bad frames found during registration leave the sweep's features (window and map).
   void dropRejected(Features* f) const {
     if (std::none_of(rejected_sources.begin(), rejected_sources.end(), [](char c) { return c != 0; })) return;
     dropSources(rejected_sources, &f->edges, &f->edge_source);
     dropSources(rejected_sources, &f->planes, &f->plane_source);
-    f->map_edges = f->edges;
-    f->map_planes = f->planes;
   }
 
   // ---- stage: returns on things that moved in (space an earlier sweep saw through) ----
@@ -415,8 +416,6 @@ struct Odometry::Impl {
       if (moved[i]) out->moved_world.push_back(world[i]);
     keep(&f->edges, &f->edge_source);
     keep(&f->planes, &f->plane_source);
-    f->map_edges = f->edges;
-    f->map_planes = f->planes;
     out->dynamic_points = static_cast<std::size_t>(std::count(moved.begin(), moved.end(), 1));
     if (moved_voxels.empty() || out->points_body.empty()) return;
     std::size_t k = 0;
@@ -446,10 +445,10 @@ struct Odometry::Impl {
   void addToMap(const WindowKeyframe& kf) {
     const Eigen::Isometry3d T = poseOf(kf.x.pose);
     std::vector<Eigen::Vector3d> e, p;
-    e.reserve(kf.features.map_edges.size());
-    p.reserve(kf.features.map_planes.size());
-    for (const auto& v : kf.features.map_edges) e.push_back(T * v);
-    for (const auto& v : kf.features.map_planes) p.push_back(T * v);
+    e.reserve(kf.features.edges.size());
+    p.reserve(kf.features.planes.size());
+    for (const auto& v : kf.features.edges) e.push_back(T * v);
+    for (const auto& v : kf.features.planes) p.push_back(T * v);
     edge_map.add(e);
     plane_map.add(p);
     edge_map.removeFarFrom(T.translation(), cfg.local_map_radius_m);
@@ -577,14 +576,15 @@ SweepResult Odometry::process(const lidar::AlignedSweep& sweep) {
   if (d.view && imu_ok) d.rejectMovedIn(&features, predicted.pose(), sweep.end_ns, &out);
   out.times_ms.emplace_back("dynamic", watch.lapMs());
 
-  // ---- registration ----
+  // ---- registration: a budget of the features; the window and the map take them all ----
+  Features matched = thinToBudget(features, d.registrationBudget());
   NavState state = predicted;
   bool tracked = true;
   d.rejected_sources = d.edge_poor;  // unless registration judges them by their information
   if (!d.plane_map.empty()) {
     out.correspondences =
-        imu_ok ? d.registerSweep(features, pre, prev, prev_velocity_guessed, &state, &out)
-               : d.registerAcrossGap(features, prev, prev_velocity_guessed, unobserved_s, &state, &out);
+        imu_ok ? d.registerSweep(matched, pre, prev, prev_velocity_guessed, &state, &out)
+               : d.registerAcrossGap(matched, prev, prev_velocity_guessed, unobserved_s, &state, &out);
     if (out.correspondences < kMinCorrespondences) {
       tracked = false;
       state = predicted;

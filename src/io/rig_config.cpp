@@ -65,6 +65,11 @@ void bindOdometry(YamlBinder& b, estimator::OdometryConfig& c) {
   using estimator::SurfacePoints;
   b.field("edge_voxel_m", c.edge_voxel_m, "voxel size for downsampling edge features, m");
   b.field("plane_voxel_m", c.plane_voxel_m, "voxel size for downsampling plane features, m");
+  b.field("registration_max_edges", c.registration_max_edges,
+          "a sweep's registration matches at most this many edge features, thinned evenly over space (0: all); "
+          "keyframes' window and the map use all");
+  b.field("registration_max_planes", c.registration_max_planes,
+          "... and at most this many plane features (0: all)");
   b.choice("surface_points", c.surface_points,
            {{SurfacePoints::kSolidState, "solid_state"}, {SurfacePoints::kAll, "all"}, {SurfacePoints::kNone, "none"}},
            "LiDARs whose every return (not only scan-line plane features) is matched point-to-plane, the map's "
@@ -283,6 +288,8 @@ void validateRigConfig(const RigConfig& cfg) {
 
   check.positive(e.edge_voxel_m, "odometry.edge_voxel_m");
   check.positive(e.plane_voxel_m, "odometry.plane_voxel_m");
+  check.nonNegative(e.registration_max_edges, "odometry.registration_max_edges");
+  check.nonNegative(e.registration_max_planes, "odometry.registration_max_planes");
   check.nonNegative(e.degeneracy.min_points, "odometry.degenerate_min_points");
   check.positive(e.map_voxel_m, "odometry.map_voxel_m");
   check.positive(e.local_map_radius_m, "odometry.local_map_radius_m");

@@ -15,9 +15,8 @@ namespace mmlio::estimator {
 
 /// Body-frame features of one sweep.
 struct Features {
-  std::vector<Eigen::Vector3d> edges, planes;          // matched against the map
+  std::vector<Eigen::Vector3d> edges, planes;          // matched against the map (and added to it)
   std::vector<std::uint8_t> edge_source, plane_source;  // the LiDAR of each (empty: all from LiDAR 0)
-  std::vector<Eigen::Vector3d> map_edges, map_planes;  // added to the map
 };
 
 /// A residual against the local map, found at the current estimate.
