@@ -111,6 +111,8 @@ struct Odometry::Impl {
     w.max_iterations = c.max_iterations;
     w.lidar_sigma_m = c.lidar_sigma_m;
     w.huber_loss_m = c.huber_loss_m;
+    w.reassociate_m = 0.1 * c.plane_voxel_m;
+    w.reassociate_rad = kReassociateRad;
     return w;
   }
 

@@ -73,6 +73,19 @@ void SlidingWindow::clear() {
   prior_blocks_.clear();
 }
 
+const std::vector<MapMatch>& SlidingWindow::matchesOf(WindowKeyframe& kf, const map::VoxelHashMap& edge_map,
+                                                      const map::VoxelHashMap& plane_map) const {
+  const Eigen::Isometry3d T = poseOf(kf.x.pose);
+  const Eigen::Isometry3d moved = kf.matched_at.inverse() * T;
+  if (!kf.matched || moved.translation().norm() >= cfg_.reassociate_m ||
+      Eigen::AngleAxisd(moved.linear()).angle() >= cfg_.reassociate_rad) {
+    kf.matches = findMapMatches(kf.features, T, edge_map, plane_map, cfg_.matching);
+    kf.matched_at = T;
+    kf.matched = true;
+  }
+  return kf.matches;
+}
+
 void SlidingWindow::optimize(const map::VoxelHashMap& edge_map, const map::VoxelHashMap& plane_map) {
   if (keyframes_.size() < 2) return;
   ceres::Problem::Options po;
@@ -95,9 +108,7 @@ void SlidingWindow::optimize(const map::VoxelHashMap& edge_map, const map::Voxel
                              b.x.speed_bias);
   }
   for (auto& kf : keyframes_)
-    addMapResiduals(problem, kf.x.pose,
-                    findMapMatches(kf.features, poseOf(kf.x.pose), edge_map, plane_map, cfg_.matching),
-                    cfg_.lidar_sigma_m, cfg_.huber_loss_m);
+    addMapResiduals(problem, kf.x.pose, matchesOf(kf, edge_map, plane_map), cfg_.lidar_sigma_m, cfg_.huber_loss_m);
   ceres::Solver::Summary summary;
   ceres::Solve(odometrySolverOptions(cfg_.max_iterations), &problem, &summary);
 }
@@ -118,7 +129,7 @@ void SlidingWindow::marginalizeOldest(const map::VoxelHashMap& edge_map, const m
   const double w = 1.0 / cfg_.lidar_sigma_m;
   ceres::LossFunction* loss = new ceres::HuberLoss(cfg_.huber_loss_m * w);  // shared, deleted once
   bool loss_used = false;
-  for (const MapMatch& m : findMapMatches(old.features, poseOf(old.x.pose), edge_map, plane_map, cfg_.matching)) {
+  for (const MapMatch& m : matchesOf(old, edge_map, plane_map)) {
     info->addResidualBlock({mapMatchCost(m, w), loss, {old.x.pose}, {0}});
     loss_used = true;
   }

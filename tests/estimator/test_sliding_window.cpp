@@ -146,5 +146,31 @@ TEST_F(WindowOnSimulation, MarginalisationPriorKeepsTheWindowOnTrackAfterItSlide
   }
 }
 
+TEST_F(WindowOnSimulation, AKeyframesMatchesAreFoundAgainOnlyOnceItsPoseMoved) {
+  SlidingWindow window(SlidingWindowConfig{}, g_);
+  window.push(keyframe(60, -1, sim_.trueState(endNs(60))));
+  window.push(keyframe(70, 60, sim_.trueState(endNs(70))));
+  window.optimize(edge_map_, plane_map_);
+  const std::size_t found = window.at(1).matches.size();
+  ASSERT_GT(found, 300u);
+  // Started at the truth the poses move by millimetres: the matches stand even against a map that
+  // has since lost every point ...
+  const map::VoxelHashMap empty{0.5, 60};
+  window.optimize(empty, empty);
+  EXPECT_EQ(window.at(1).matches.size(), found);
+  // ... until a keyframe is farther than reassociate_m from where they were found.
+  SlidingWindow moved(SlidingWindowConfig{}, g_);
+  NavState off = sim_.trueState(endNs(70));
+  off.p_world.x() += 0.05;
+  moved.push(keyframe(60, -1, sim_.trueState(endNs(60))));
+  WindowKeyframe kf = keyframe(70, 60, off);
+  kf.matches = std::vector<MapMatch>(found);
+  kf.matched_at = sim_.trueState(endNs(70)).pose();
+  kf.matched = true;
+  moved.push(std::move(kf));
+  moved.optimize(empty, empty);
+  EXPECT_EQ(moved.at(1).matches.size(), 0u) << "5 cm from where its matches were found: found again";
+}
+
 }  // namespace
 }  // namespace mmlio::estimator

@@ -7,6 +7,7 @@
 // Parameter blocks follow the estimator convention: pose {p, q(x,y,z,w)}, speed-bias {v, ba, bg}.
 #include <ceres/solver.h>
 
+#include <cmath>
 #include <deque>
 #include <memory>
 #include <vector>
@@ -34,6 +35,10 @@ struct WindowKeyframe {
   StateBlocks x;
   Features features;
   std::shared_ptr<imu::Preintegration> pre;  // from the previous keyframe of the window to this one
+  // Its map matches and the pose they were found at (kept while the pose stays near it).
+  std::vector<MapMatch> matches;
+  Eigen::Isometry3d matched_at = Eigen::Isometry3d::Identity();
+  bool matched = false;
 };
 
 struct SlidingWindowConfig {
@@ -42,6 +47,10 @@ struct SlidingWindowConfig {
   double lidar_sigma_m = 0.05;    // point-to-map residual standard deviation
   double huber_loss_m = 0.05;     // robust loss scale of the point-to-map residuals
   MapMatchConfig matching;
+  // A keyframe's matches are found again only once its pose moved this far from where they were
+  // found: smaller moves leave its points' k nearest map points the same.
+  double reassociate_m = 0.03;
+  double reassociate_rad = 0.1 * M_PI / 180.0;
 };
 
 /// Solver options shared by the odometry's problems (small, dense, one thread).
@@ -58,7 +67,8 @@ class SlidingWindow {
 
   /// Appends a keyframe; its `pre` must span from the current newest keyframe (ignored if empty).
   void push(WindowKeyframe kf);
-  /// Re-matches every keyframe's features against the maps at its estimate, then solves.
+  /// Matches each keyframe's features against the maps at its estimate (again only where it moved
+  /// since: see reassociate_m), then solves.
   void optimize(const map::VoxelHashMap& edge_map, const map::VoxelHashMap& plane_map);
   /// When more than `size` keyframes are held: folds the oldest into the prior and drops it.
   void marginalizeOldest(const map::VoxelHashMap& edge_map, const map::VoxelHashMap& plane_map);
@@ -72,6 +82,9 @@ class SlidingWindow {
   const WindowKeyframe& at(std::size_t i) const { return keyframes_.at(i); }
 
  private:
+  const std::vector<MapMatch>& matchesOf(WindowKeyframe& kf, const map::VoxelHashMap& edge_map,
+                                         const map::VoxelHashMap& plane_map) const;
+
   SlidingWindowConfig cfg_;
   Eigen::Vector3d g_world_;
   std::deque<WindowKeyframe> keyframes_;  // deque: parameter addresses stay valid on pop_front
