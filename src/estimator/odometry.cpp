@@ -388,16 +388,15 @@ struct Odometry::Impl {
     };
     // A mover is found where part of it entered free space (its leading side); its other returns
     // lie next to those: every feature in a voxel touching a flagged one goes with them.
-    FlatKeySet flagged;
+    // The flagged voxels are few: their neighbourhoods go in one set, looked up once per feature.
+    FlatKeySet near_flagged;
     const auto bodyPoint = [&](std::size_t i) { return i < f->edges.size() ? f->edges[i] : f->planes[i - f->edges.size()]; };
     for (std::size_t i = 0; i < moved.size(); ++i)
-      if (moved[i]) flagged.insert(key(bodyPoint(i)));
-    if (!flagged.empty())
-      for (std::size_t i = 0; i < moved.size(); ++i) {
-        const Eigen::Vector3d p = bodyPoint(i);
-        for (int n = 0; n < 27 && !moved[i]; ++n)
-          moved[i] = flagged.contains(key(p, n % 3 - 1, (n / 3) % 3 - 1, n / 9 - 1)) ? 1 : 0;
-      }
+      if (moved[i])
+        for (int n = 0; n < 27; ++n) near_flagged.insert(key(bodyPoint(i), n % 3 - 1, (n / 3) % 3 - 1, n / 9 - 1));
+    if (!near_flagged.empty())
+      for (std::size_t i = 0; i < moved.size(); ++i)
+        if (!moved[i]) moved[i] = near_flagged.contains(key(bodyPoint(i))) ? 1 : 0;
     FlatKeySet moved_voxels;
     std::size_t index = 0;
     const auto keep = [&](std::vector<Eigen::Vector3d>* pts, std::vector<std::uint8_t>* src) {
