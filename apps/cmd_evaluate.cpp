@@ -34,6 +34,7 @@ struct EvaluateArgs {
   std::string map_path;
   std::string map_scenario;
   std::string off_surface_path;
+  std::string removed_path;
   eval::EvalOptions options;
 };
 
@@ -46,10 +47,20 @@ struct MapSharpness {
   double median_m = 0.0, p90_m = 0.0;
   double off_surface_fraction = 0.0;
   std::size_t static_voxels = 0;
+  // Static surface that only the removed points (map_dynamic.pcd) cover: what the dynamic handling
+  // took out of the map, as opposed to what people hid from every view. -1: not asked.
+  long static_voxels_removed = -1;
 };
 
+constexpr double kOnSurfaceM = 0.1;
+
+std::uint64_t surfaceVoxelOf(const Eigen::Vector3d& w) {
+  const auto idx = [](double v) { return static_cast<std::int64_t>(std::floor(v / kOnSurfaceM)); };
+  return packVoxelKey(idx(w.x()), idx(w.y()), idx(w.z()));
+}
+
 MapSharpness mapSharpness(const std::string& map_path, const std::string& scenario, const Eigen::Isometry3d& T_gt_est,
-                          const std::string& off_surface_path) {
+                          const std::string& off_surface_path, const std::string& removed_path) {
   const sim::Scene scene(sim::makeScenario(scenario).boxes);
   const std::vector<Point> map = io::readPcd(map_path);
   if (map.empty()) throw Error("evaluate: map '" + map_path + "' has no points");
@@ -57,7 +68,6 @@ MapSharpness mapSharpness(const std::string& map_path, const std::string& scenar
   tbb::parallel_for(std::size_t(0), map.size(), [&](std::size_t i) {
     d[i] = scene.distanceToSurface(T_gt_est * map[i].xyz.cast<double>());
   });
-  constexpr double kOnSurfaceM = 0.1;
   std::unordered_set<std::uint64_t> voxels;
   std::vector<Point> off_points;
   for (std::size_t i = 0; i < map.size(); ++i) {
@@ -67,8 +77,7 @@ MapSharpness mapSharpness(const std::string& map_path, const std::string& scenar
       off_points.back().xyz = w.cast<float>();
       continue;
     }
-    const auto idx = [](double v) { return static_cast<std::int64_t>(std::floor(v / kOnSurfaceM)); };
-    voxels.insert(packVoxelKey(idx(w.x()), idx(w.y()), idx(w.z())));
+    voxels.insert(surfaceVoxelOf(w));
   }
   const auto at = [&d](double q) {
     const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(d.size() - 1));
@@ -80,6 +89,16 @@ MapSharpness mapSharpness(const std::string& map_path, const std::string& scenar
   s.off_surface_fraction = static_cast<double>(off_points.size()) / static_cast<double>(map.size());
   if (!off_surface_path.empty()) io::writePcdBinary(off_surface_path, off_points);
   s.static_voxels = voxels.size();
+  if (!removed_path.empty()) {
+    std::unordered_set<std::uint64_t> only_removed;
+    for (const Point& p : io::readPcd(removed_path)) {
+      const Eigen::Vector3d w = T_gt_est * p.xyz.cast<double>();
+      if (scene.distanceToSurface(w) > kOnSurfaceM) continue;
+      const std::uint64_t key = surfaceVoxelOf(w);
+      if (!voxels.count(key)) only_removed.insert(key);
+    }
+    s.static_voxels_removed = static_cast<long>(only_removed.size());
+  }
   s.median_m = at(0.5);
   s.p90_m = at(0.9);
   return s;
@@ -144,15 +163,19 @@ void runEvaluate(const EvaluateArgs& args) {
   if (!args.plot_path.empty()) eval::plotEvaluation(result, args.plot_path);
 
   MapSharpness map;
-  if (!args.map_path.empty()) map = mapSharpness(args.map_path, args.map_scenario, result.T_gt_est_pose, args.off_surface_path);
+  if (!args.map_path.empty())
+    map = mapSharpness(args.map_path, args.map_scenario, result.T_gt_est_pose, args.off_surface_path, args.removed_path);
   if (args.json) {
     std::string line = eval::toJsonLine(result);
     if (!args.map_path.empty() && !line.empty() && line.back() == '}') {
-      char extra[256];
+      char extra[320];
       std::snprintf(extra, sizeof(extra),
                     ", \"map_points\": %zu, \"map_median_m\": %.5f, \"map_p90_m\": %.5f, \"map_off_surface_fraction\": %.5f, "
-                    "\"map_static_voxels\": %zu}",
-                    map.points, map.median_m, map.p90_m, map.off_surface_fraction, map.static_voxels);
+                    "\"map_static_voxels\": %zu%s}",
+                    map.points, map.median_m, map.p90_m, map.off_surface_fraction, map.static_voxels,
+                    map.static_voxels_removed < 0
+                        ? ""
+                        : (", \"map_static_voxels_removed\": " + std::to_string(map.static_voxels_removed)).c_str());
       line.pop_back();
       line += extra;
     }
@@ -165,6 +188,9 @@ void runEvaluate(const EvaluateArgs& args) {
       std::cout << row("map to true surfaces", map.p90_m, "m 90th percentile");
       std::cout << row("map off surfaces", 100.0 * map.off_surface_fraction, "% of points > 10 cm", "%.2f");
       std::cout << row("static surface voxels", static_cast<double>(map.static_voxels), "(10 cm)", "%.0f");
+      if (map.static_voxels_removed >= 0)
+        std::cout << row("... only removed", static_cast<double>(map.static_voxels_removed), "(only --removed covers)",
+                         "%.0f");
     }
     if (!args.plot_path.empty()) std::cout << "  plot                   " << args.plot_path << '\n';
   }
@@ -194,6 +220,11 @@ void registerEvaluateCommand(CLI::App& app) {
   cmd->get_option("--map")->needs(cmd->get_option("--scenario"));
   cmd->add_option("--off-surface", args->off_surface_path,
                   "With --map: write its points farther than 10 cm from every true surface to this PCD (ground-truth frame)")
+      ->needs(cmd->get_option("--map"));
+  cmd->add_option("--removed", args->removed_path,
+                  "With --map: the points the run removed (map_dynamic.pcd); counts the static surface voxels only they "
+                  "cover (what the dynamic handling took out of the map)")
+      ->check(CLI::ExistingFile)
       ->needs(cmd->get_option("--map"));
   cmd->callback([args] { runEvaluate(*args); });
 }

@@ -65,6 +65,24 @@ for sc in scenes:
               f"{f'{statistics.median(e2e):.3f} / {max(e2e):.3f}' if e2e else 'n/a'} | "
               f"{fmt(statistics.median(mp), 1000, 'mm', 1) if mp else 'n/a'} | "
               f"{f'{100 * statistics.median(off):.2f} / {100 * max(off):.2f} %' if off else 'n/a'} | {beat} |")
+# Static surface with people against the same cell without: what the map still covers, and what
+# the dynamic handling removed (static voxels only map_dynamic.pcd covers); the rest people hid.
+kept = []
+for r in rows:
+    if not r.get("people") or "map_static_voxels" not in r:
+        continue
+    base = [b for b in rows if not b.get("people") and b["seed"] == r["seed"] and b["noise"] == r["noise"]
+            and b["run"] == r["run"] and b["scene"] == r["scene"].split()[0] and b.get("map_static_voxels")]
+    if base:
+        kept.append((r, base[0]["map_static_voxels"]))
+if kept:
+    print()
+    print("| cell | run | static kept (of the cell without people) | removed by the dynamic handling |")
+    print("|---|---|---|---|")
+    for r, empty in kept:
+        removed = r.get("map_static_voxels_removed")
+        print(f'| {r["scene"]} s{r["seed"]} n{r["noise"]} | {r["run"]} | {100 * r["map_static_voxels"] / empty:.1f} % | '
+              f'{"n/a" if removed is None else f"{100 * removed / empty:.1f} %"} |')
 PY
 }
 

@@ -43,8 +43,10 @@ for run in "${MODES[@]}"; do
     --no-progress --out "$rd" > "$rd.log" 2>&1 || status=failed
   ev='{}'
   if [ "$status" = ok ]; then
+    removed=()
+    [ -f "$rd/map_dynamic.pcd" ] && removed=(--removed "$rd/map_dynamic.pcd")
     ev=$("$MMLIO" evaluate --gt "$dir/${SCENE}_gt.tum" --est "$rd/trajectory.tum" --map "$rd/map.pcd" \
-      --scenario "$SCENE" --json 2>/dev/null || echo '{}')
+      "${removed[@]}" --scenario "$SCENE" --json 2>/dev/null || echo '{}')
   fi
   python3 - "$SCENE" "$SEED" "$LEVEL" "$pattern" "$run" "$status" "$rd" "$ev" "$PEOPLE" <<'PY'
 import json, os, sys
