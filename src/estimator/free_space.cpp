@@ -5,18 +5,18 @@
 namespace mmlio::estimator {
 
 void SweepView::place(const Eigen::Isometry3d& T_world_body) {
-  for (SensorView& s : sensors) s.T_world_sensor = T_world_body * s.T_body_sensor;
+  for (SensorView& s : sensors) s.T_sensor_world = (T_world_body * s.T_body_sensor).inverse();
 }
 
 bool SweepView::seesThrough(const Eigen::Vector3d& p_world) const {
   for (const SensorView& s : sensors)
-    if (s.image.classify(s.T_world_sensor.inverse() * p_world) == map::Visibility::kFree) return true;
+    if (s.image.classify(s.T_sensor_world * p_world) == map::Visibility::kFree) return true;
   return false;
 }
 
 void SweepView::count(const Eigen::Vector3d& p_world, int* free, int* hit) const {
   for (const SensorView& s : sensors) {
-    const map::Visibility v = s.image.classify(s.T_world_sensor.inverse() * p_world);
+    const map::Visibility v = s.image.classify(s.T_sensor_world * p_world);
     *free += v == map::Visibility::kFree;
     *hit += v == map::Visibility::kHit;
   }

@@ -87,20 +87,25 @@ Visibility RangeImage::classify(const Eigen::Vector3d& p) const {
   if (ranges_.empty()) return Visibility::kUnknown;
   const double r = p.norm();
   if (!(r >= cfg_.min_range_m) || r > cfg_.max_range_m) return Visibility::kUnknown;
-  int col, row;  // a row just outside the image still sees measured rows through the window
-  pixelOf(p, &col, &row);
+  // Most points asked about lie outside a solid-state LiDAR's rows or arc: the window is placed
+  // row first, then column by column (x once per column), and left as soon as it is empty.
+  const int row = rowOf(elevationOf(p), inv_res_) - row0_;  // a row just outside still sees measured rows
+  if (row + cfg_.window_rows < 0 || row - cfg_.window_rows >= rows_) return Visibility::kUnknown;
+  const int col = std::clamp(static_cast<int>(std::floor((fastAtan2(p.y(), p.x()) * kRadToDeg + 180.0) * inv_res_)),
+                             0, circle_cols_ - 1);
   const double margin = cfg_.margin_m + cfg_.margin_fraction * r;
   const double hit_margin = cfg_.hit_margin_m + cfg_.hit_margin_fraction * r;
+  const int y_lo = std::max(0, row - cfg_.window_rows), y_hi = std::min(rows_ - 1, row + cfg_.window_rows);
   double nearest = std::numeric_limits<double>::infinity();
   bool hit = false, below = false, above = false, left = false, right = false;
-  for (int dr = -cfg_.window_rows; dr <= cfg_.window_rows; ++dr) {
-    const int y = row + dr;
-    if (y < 0 || y >= rows_) continue;
-    const std::uint16_t* line = &ranges_[static_cast<std::size_t>(y) * static_cast<std::size_t>(cols_)];
-    for (int dc = -cfg_.window_cols; dc <= cfg_.window_cols; ++dc) {
-      const int x = (col + dc - col0_ + 2 * circle_cols_) % circle_cols_;
-      if (x >= cols_ || line[x] == 0) continue;
-      const double m = 0.01 * line[x];
+  for (int dc = -cfg_.window_cols; dc <= cfg_.window_cols; ++dc) {
+    const int x = (col + dc - col0_ + 2 * circle_cols_) % circle_cols_;
+    if (x >= cols_) continue;
+    for (int y = y_lo; y <= y_hi; ++y) {
+      const std::uint16_t cell = ranges_[static_cast<std::size_t>(y) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(x)];
+      if (cell == 0) continue;
+      const int dr = y - row;
+      const double m = 0.01 * cell;
       nearest = std::min(nearest, m);
       // Seen ON: a return at the point's range in its own pixel or the ones just above and below.
       // The rest of the window does not count: at grazing incidence it reaches a wall or the floor

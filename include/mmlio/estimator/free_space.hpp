@@ -31,7 +31,7 @@ struct DynamicConfig {
 /// One LiDAR's view at the end of a sweep.
 struct SensorView {
   Eigen::Isometry3d T_body_sensor = Eigen::Isometry3d::Identity();
-  Eigen::Isometry3d T_world_sensor = Eigen::Isometry3d::Identity();  // at the odometry estimate
+  Eigen::Isometry3d T_sensor_world = Eigen::Isometry3d::Identity();  // at the odometry estimate
   map::RangeImage image;
 };
 
