@@ -39,12 +39,14 @@ void orderLine(const LidarScan& scan, bool spinning, std::vector<std::size_t>* l
     std::vector<std::pair<double, std::size_t>> keyed;
     keyed.reserve(line->size());
     for (std::size_t i : *line) keyed.emplace_back(azimuthOrderKey(scan.points[i]), i);
-    std::stable_sort(keyed.begin(), keyed.end(),
-                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    const auto by_key = [](const auto& a, const auto& b) { return a.first < b.first; };
+    if (std::is_sorted(keyed.begin(), keyed.end(), by_key)) return;
+    std::stable_sort(keyed.begin(), keyed.end(), by_key);
     for (std::size_t k = 0; k < keyed.size(); ++k) (*line)[k] = keyed[k].second;
   } else {
-    std::stable_sort(line->begin(), line->end(),
-                     [&](std::size_t a, std::size_t b) { return scan.points[a].time_s < scan.points[b].time_s; });
+    // Drivers send a line in time order: checking costs a pass, sorting n log n.
+    const auto by_time = [&](std::size_t a, std::size_t b) { return scan.points[a].time_s < scan.points[b].time_s; };
+    if (!std::is_sorted(line->begin(), line->end(), by_time)) std::stable_sort(line->begin(), line->end(), by_time);
   }
 }
 
