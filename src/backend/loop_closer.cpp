@@ -12,6 +12,10 @@ namespace mmlio::backend {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
+// Each of the twelve uniqueness restarts needs only to tell whether another alignment fits about
+// as well: a couple of thousand spread-out points decide that (a hall keyframe has ~9000 at 0.3 m,
+// and the restarts were most of a loop check's 2-3 s there).
+constexpr std::size_t kMaxRestartSourcePoints = 2000;
 
 std::string fmt(double v) {
   std::ostringstream os;
@@ -109,6 +113,7 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
   restart.voxel_fine_m = std::max(icp_.voxel_fine_m, 0.3);
   restart.max_corr_fine_m = std::max(icp_.max_corr_fine_m, 0.5);
   restart.max_iterations_per_level = 10;
+  restart.max_source_points = kMaxRestartSourcePoints;
   const auto axes = horizontalAxes(map::voxelCentroids(source, 0.5), r.T_target_source);
   for (const auto& axis : axes)
     for (double shift : cfg_.ambiguity_shifts_m)

@@ -99,6 +99,12 @@ IcpResult alignPointToPlane(const std::vector<Eigen::Vector3d>& source, const Ic
   for (int level = 0; level < levels; ++level) {
     const double gate = geometric(cfg.max_corr_coarse_m, cfg.max_corr_fine_m, level, levels);
     src = map::voxelCentroids(source, geometric(cfg.voxel_coarse_m, cfg.voxel_fine_m, level, levels));
+    if (cfg.max_source_points > 0 && src.size() > cfg.max_source_points) {
+      const std::size_t stride = (src.size() + cfg.max_source_points - 1) / cfg.max_source_points;
+      std::size_t kept = 0;
+      for (std::size_t i = 0; i < src.size(); i += stride) src[kept++] = src[i];
+      src.resize(kept);
+    }
     const double gate_sq = gate * gate;
     for (int it = 0; it < cfg.max_iterations_per_level; ++it) {
       H.setZero();

@@ -33,6 +33,28 @@ TEST(PointToPlaneIcp, RecoversAKnownOffsetBetweenTwoScansOfARoom) {
   EXPECT_GT(r.min_translation_eigenvalue, 0.02);  // a room constrains every direction
 }
 
+TEST(PointToPlaneIcp, TwoThousandSpreadOutSourcePointsAlignAsWellAsAll) {
+  const auto scene = testing::roomA();
+  const Eigen::Isometry3d T_world_a = pose(-1.0, 0.5, 1.0, 0.2);
+  const Eigen::Isometry3d T_a_b = pose(0.6, -0.4, 0.05, 6 * kDeg, 1 * kDeg, -0.5 * kDeg);
+  const IcpTarget target(map::voxelCentroids(testing::scan(scene, T_world_a, 1), 0.1));
+  const auto cloud_b = testing::scan(scene, T_world_a * T_a_b, 2);
+  IcpConfig capped;
+  capped.max_source_points = 2000;
+  const IcpResult all = alignPointToPlane(cloud_b, target, Eigen::Isometry3d::Identity());
+  const IcpResult few = alignPointToPlane(cloud_b, target, Eigen::Isometry3d::Identity(), capped);
+  ASSERT_TRUE(all.converged && few.converged);
+  ASSERT_GT(all.correspondences, 4000) << "the cap must bite for the test to mean anything";
+  EXPECT_LE(few.correspondences, 2000);
+  std::printf("all %d correspondences, capped %d: fitness %.4f / %.4f m, overlap %.3f / %.3f\n", all.correspondences,
+              few.correspondences, all.fitness_m, few.fitness_m, all.overlap, few.overlap);
+  const Eigen::Isometry3d err = T_a_b.inverse() * few.T_target_source;
+  EXPECT_LT(err.translation().norm(), 0.01);
+  EXPECT_LT(angleOf(err), 0.1 * kDeg);
+  EXPECT_NEAR(few.fitness_m, all.fitness_m, 0.3 * all.fitness_m);
+  EXPECT_NEAR(few.overlap, all.overlap, 0.05);
+}
+
 TEST(PointToPlaneIcp, FlagsAFeaturelessCorridorAsDegenerateAlongItsAxis) {
   const auto scene = testing::corridor(200.0, 4.0, /*doors=*/false);
   const auto cloud_a = testing::scan(scene, pose(0, 0, 1.0, 0), 3, 0.01, 20.0);

@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstddef>
 #include <memory>
 #include <vector>
 
@@ -52,6 +53,10 @@ struct IcpConfig {
   double converged_translation_m = 1e-4;   // stop a level when the update is below both
   double converged_rotation_rad = 1e-5;
   int min_correspondences = 30;         // fewer: the alignment fails
+  // At most this many source points per level, evenly spaced in the downsampled cloud (0: all): a
+  // 60 m hall keyframe at 0.1 m is tens of thousands of points, and the pose, fitness and overlap
+  // of a rigid alignment are as well determined by a spread-out fraction of them.
+  std::size_t max_source_points = 0;
 };
 
 struct IcpResult {
