@@ -48,6 +48,11 @@ std::vector<MapMatch> findMapMatches(const Features& f, const Eigen::Isometry3d&
   return out;
 }
 
+bool Reassociation::needed(const Eigen::Isometry3d& found_at, const Eigen::Isometry3d& now) const {
+  const Eigen::Isometry3d moved = found_at.inverse() * now;
+  return moved.translation().norm() >= translation_m || Eigen::AngleAxisd(moved.linear()).angle() >= rotation_rad;
+}
+
 double matchDistance(const MapMatch& m, const Eigen::Isometry3d& T_world_body) {
   const Eigen::Vector3d q = T_world_body * m.p_body;
   if (m.kind == MapMatch::Kind::kPlane) return std::abs(m.a.dot(q) + m.b.x());

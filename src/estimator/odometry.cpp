@@ -51,9 +51,9 @@ lidar::SweepMotion imuMotion(const NavState& start, const std::vector<ImuSample>
 }
 constexpr Stamp kMaxImuGapNs = 50000000;  // 50 ms: ten samples of a 200 Hz IMU
 constexpr double kGuessedVelocitySigma = 1.0;  // m/s: a velocity guessed across a gap (walking, driving slowly)
-// Re-associate after a registration round only if the pose moved more than a tenth of the plane
-// voxel or a tenth of a degree: smaller moves leave the k nearest map points unchanged.
-constexpr double kReassociateRad = 0.1 * M_PI / 180.0;
+// Registration rounds and the window find matches again once a pose moved a tenth of the plane
+// voxel or a tenth of a degree from where they were found.
+Reassociation reassociationFor(const OdometryConfig& c) { return {0.1 * c.plane_voxel_m, 0.1 * M_PI / 180.0}; }
 
 // Over a gap in all data the motion is not measured: the turn the rig was in may have stopped, gone
 // on, sped up, or one may have begun. Registration starts from the last turn rate and velocity
@@ -111,8 +111,7 @@ struct Odometry::Impl {
     w.max_iterations = c.max_iterations;
     w.lidar_sigma_m = c.lidar_sigma_m;
     w.huber_loss_m = c.huber_loss_m;
-    w.reassociate_m = 0.1 * c.plane_voxel_m;
-    w.reassociate_rad = kReassociateRad;
+    w.reassociation = reassociationFor(c);
     return w;
   }
 
@@ -222,7 +221,6 @@ struct Odometry::Impl {
   std::size_t registerSweep(const Features& f, const std::shared_ptr<imu::Preintegration>& pre, const NavState& prev,
                             bool prev_velocity_guessed, NavState* state, SweepResult* out) {
     const NavState predicted = *state;
-    const double reassociate_m = 0.1 * cfg.plane_voxel_m;
     std::vector<MapMatch> matches;
     std::vector<char> rejected(lidars.size(), 0);  // solid-state frames judged bad by their information
     StateBlocks xi = toBlocks(prev), xj = toBlocks(*state);
@@ -260,8 +258,7 @@ struct Odometry::Impl {
       ceres::Solver::Summary summary;
       ceres::Solve(odometrySolverOptions(std::max(2, cfg.max_iterations / rounds)), &problem, &summary);
       // Associations are redone to follow the pose; a pose that barely moved would find the same ones.
-      const Eigen::Isometry3d delta = T_before.inverse() * poseOf(xj.pose);
-      if (delta.translation().norm() < reassociate_m && Eigen::AngleAxisd(delta.linear()).angle() < kReassociateRad) break;
+      if (!reassociationFor(cfg).needed(T_before, poseOf(xj.pose))) break;
     }
     *state = fromBlocks(xj, state->stamp_ns);
     // What did the LiDARs constrain? Along what they could not, nearest-neighbour associations only

@@ -76,9 +76,7 @@ void SlidingWindow::clear() {
 const std::vector<MapMatch>& SlidingWindow::matchesOf(WindowKeyframe& kf, const map::VoxelHashMap& edge_map,
                                                       const map::VoxelHashMap& plane_map) const {
   const Eigen::Isometry3d T = poseOf(kf.x.pose);
-  const Eigen::Isometry3d moved = kf.matched_at.inverse() * T;
-  if (!kf.matched || moved.translation().norm() >= cfg_.reassociate_m ||
-      Eigen::AngleAxisd(moved.linear()).angle() >= cfg_.reassociate_rad) {
+  if (!kf.matched || cfg_.reassociation.needed(kf.matched_at, T)) {
     kf.matches = findMapMatches(kf.features, T, edge_map, plane_map, cfg_.matching);
     kf.matched_at = T;
     kf.matched = true;

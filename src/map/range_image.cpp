@@ -77,9 +77,13 @@ RangeImage::RangeImage(const std::vector<Point>& points, const RangeImageConfig&
   }
 }
 
-void RangeImage::pixelOf(const Eigen::Vector3d& p, int* col, int* row) const {
-  *col = std::clamp(static_cast<int>(std::floor((fastAtan2(p.y(), p.x()) * kRadToDeg + 180.0) * inv_res_)), 0,
+int RangeImage::colOf(const Eigen::Vector3d& p) const {
+  return std::clamp(static_cast<int>(std::floor((fastAtan2(p.y(), p.x()) * kRadToDeg + 180.0) * inv_res_)), 0,
                     circle_cols_ - 1);
+}
+
+void RangeImage::pixelOf(const Eigen::Vector3d& p, int* col, int* row) const {
+  *col = colOf(p);
   *row = rowOf(elevationOf(p), inv_res_) - row0_;
 }
 
@@ -91,8 +95,7 @@ Visibility RangeImage::classify(const Eigen::Vector3d& p) const {
   // row first, then column by column (x once per column), and left as soon as it is empty.
   const int row = rowOf(elevationOf(p), inv_res_) - row0_;  // a row just outside still sees measured rows
   if (row + cfg_.window_rows < 0 || row - cfg_.window_rows >= rows_) return Visibility::kUnknown;
-  const int col = std::clamp(static_cast<int>(std::floor((fastAtan2(p.y(), p.x()) * kRadToDeg + 180.0) * inv_res_)),
-                             0, circle_cols_ - 1);
+  const int col = colOf(p);
   const double margin = cfg_.margin_m + cfg_.margin_fraction * r;
   const double hit_margin = cfg_.hit_margin_m + cfg_.hit_margin_fraction * r;
   const int y_lo = std::max(0, row - cfg_.window_rows), y_hi = std::min(rows_ - 1, row + cfg_.window_rows);

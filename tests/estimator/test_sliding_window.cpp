@@ -158,7 +158,7 @@ TEST_F(WindowOnSimulation, AKeyframesMatchesAreFoundAgainOnlyOnceItsPoseMoved) {
   const map::VoxelHashMap empty{0.5, 60};
   window.optimize(empty, empty);
   EXPECT_EQ(window.at(1).matches.size(), found);
-  // ... until a keyframe is farther than reassociate_m from where they were found.
+  // ... until a keyframe is farther than its reassociation distance from where they were found.
   SlidingWindow moved(SlidingWindowConfig{}, g_);
   NavState off = sim_.trueState(endNs(70));
   off.p_world.x() += 0.05;

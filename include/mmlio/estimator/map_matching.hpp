@@ -6,6 +6,7 @@
 #include <ceres/cost_function.h>
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -31,6 +32,14 @@ struct MapMatch {
 struct MapMatchConfig {
   double max_distance_m = 1.0;  // farther map neighbours make no correspondence
   int neighbours = 5;           // map points per line / plane fit
+};
+
+/// Matches found at one pose hold at another until the pose has moved this far from where they
+/// were found: smaller moves leave each point's k nearest map points the same.
+struct Reassociation {
+  double translation_m = 0.03;
+  double rotation_rad = 0.1 * M_PI / 180.0;
+  bool needed(const Eigen::Isometry3d& found_at, const Eigen::Isometry3d& now) const;
 };
 
 std::vector<MapMatch> findMapMatches(const Features& f, const Eigen::Isometry3d& T_world_body,

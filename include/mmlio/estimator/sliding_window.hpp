@@ -7,7 +7,6 @@
 // Parameter blocks follow the estimator convention: pose {p, q(x,y,z,w)}, speed-bias {v, ba, bg}.
 #include <ceres/solver.h>
 
-#include <cmath>
 #include <deque>
 #include <memory>
 #include <vector>
@@ -47,10 +46,7 @@ struct SlidingWindowConfig {
   double lidar_sigma_m = 0.05;    // point-to-map residual standard deviation
   double huber_loss_m = 0.05;     // robust loss scale of the point-to-map residuals
   MapMatchConfig matching;
-  // A keyframe's matches are found again only once its pose moved this far from where they were
-  // found: smaller moves leave its points' k nearest map points the same.
-  double reassociate_m = 0.03;
-  double reassociate_rad = 0.1 * M_PI / 180.0;
+  Reassociation reassociation;  // when a keyframe's kept matches are found again
 };
 
 /// Solver options shared by the odometry's problems (small, dense, one thread).
@@ -68,7 +64,7 @@ class SlidingWindow {
   /// Appends a keyframe; its `pre` must span from the current newest keyframe (ignored if empty).
   void push(WindowKeyframe kf);
   /// Matches each keyframe's features against the maps at its estimate (again only where it moved
-  /// since: see reassociate_m), then solves.
+  /// since: see reassociation), then solves.
   void optimize(const map::VoxelHashMap& edge_map, const map::VoxelHashMap& plane_map);
   /// When more than `size` keyframes are held: folds the oldest into the prior and drops it.
   void marginalizeOldest(const map::VoxelHashMap& edge_map, const map::VoxelHashMap& plane_map);

@@ -46,6 +46,7 @@ class RangeImage {
  private:
   // For a finite, non-zero p; col on the full circle, row relative to row0_ (may lie outside the image).
   void pixelOf(const Eigen::Vector3d& p, int* col, int* row) const;
+  int colOf(const Eigen::Vector3d& p) const;  // pixelOf's column alone
 
   RangeImageConfig cfg_;
   double inv_res_ = 1.0;
