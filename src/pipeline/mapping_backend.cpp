@@ -274,12 +274,14 @@ void MappingBackend::removeGhosts(std::size_t submap) {
         // A ghost is seen through by a fair share of the views that decide on it, not by most:
         // where people pace, later views also see them (or another) back on the same spot; a
         // static surface is seen through only by the rare view whose pose or mixed pixel is off.
-        // At least two views, so one such view alone never removes anything.
-        // Or: it stands where the odometry saw something move in (space earlier views saw empty;
-        // kMinMoverReturns returns, not the odd false detection) and no keyframe's view but at
-        // most its own sees it there: nothing confirms a surface in space known to have been free
-        // (a walker seen from far off in a sweep between keyframes, then hidden or out of view).
-        ghost[i] = (free >= 2 && 2 * free >= hit) || (free == 0 && hit <= 1 && moverReturns(p) >= kMinMoverReturns);
+        // Where the odometry saw something move in (space earlier views saw empty; kMinMoverReturns
+        // returns, not the odd false detection) one such view is evidence enough; elsewhere it takes
+        // two, so one off view alone never removes a surface.
+        // In such a cell, a point no keyframe's view but at most its own sees there is a ghost too:
+        // nothing confirms a surface in space known to have been free (a walker seen from far off in
+        // a sweep between keyframes, then hidden or out of view).
+        const bool mover_cell = moverReturns(p) >= kMinMoverReturns;
+        ghost[i] = (free >= (mover_cell ? 1 : 2) && 2 * free >= hit) || (mover_cell && free == 0 && hit <= 1);
       }
     });
     std::vector<Point> removed;
