@@ -69,10 +69,18 @@ RangeImage::RangeImage(const std::vector<Point>& points, const RangeImageConfig&
   }
   cols_ = circle_cols_ - widest;
   col0_ = widest == 0 ? 0 : (widest_end + 1) % circle_cols_;
-  ranges_.assign(static_cast<std::size_t>(rows_) * static_cast<std::size_t>(cols_), 0);
+  // Only rows with returns are stored: a spinning LiDAR's 16 rings fill 16 of the ~60 rows its
+  // 30 deg span covers at 0.5 deg.
+  slot_of_row_.assign(static_cast<std::size_t>(rows_), -1);
+  for (const Cell& c : cells) slot_of_row_[static_cast<std::size_t>(c.row - lo)] = 0;
+  int stored = 0;
+  for (std::int16_t& slot : slot_of_row_)
+    if (slot == 0) slot = static_cast<std::int16_t>(stored++);
+  ranges_.assign(static_cast<std::size_t>(stored) * static_cast<std::size_t>(cols_), 0);
   for (const Cell& c : cells) {
     const int x = (c.col - col0_ + circle_cols_) % circle_cols_;
-    std::uint16_t& cell = ranges_[static_cast<std::size_t>(c.row - lo) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(x)];
+    const auto slot = static_cast<std::size_t>(slot_of_row_[static_cast<std::size_t>(c.row - lo)]);
+    std::uint16_t& cell = ranges_[slot * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(x)];
     if (cell == 0 || c.cm < cell) cell = c.cm;
   }
 }
@@ -105,7 +113,9 @@ Visibility RangeImage::classify(const Eigen::Vector3d& p) const {
     const int x = (col + dc - col0_ + 2 * circle_cols_) % circle_cols_;
     if (x >= cols_) continue;
     for (int y = y_lo; y <= y_hi; ++y) {
-      const std::uint16_t cell = ranges_[static_cast<std::size_t>(y) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(x)];
+      const int slot = slot_of_row_[static_cast<std::size_t>(y)];
+      if (slot < 0) continue;
+      const std::uint16_t cell = ranges_[static_cast<std::size_t>(slot) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(x)];
       if (cell == 0) continue;
       const int dr = y - row;
       const double m = 0.01 * cell;

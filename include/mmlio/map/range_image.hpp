@@ -41,7 +41,9 @@ class RangeImage {
 
   Visibility classify(const Eigen::Vector3d& p_sensor) const;
   bool empty() const { return ranges_.empty(); }
-  std::size_t memoryBytes() const { return ranges_.size() * sizeof(ranges_[0]); }
+  std::size_t memoryBytes() const {
+    return ranges_.size() * sizeof(ranges_[0]) + slot_of_row_.size() * sizeof(slot_of_row_[0]);
+  }
 
  private:
   // For a finite, non-zero p; col on the full circle, row relative to row0_ (may lie outside the image).
@@ -54,8 +56,10 @@ class RangeImage {
   int cols_ = 0, rows_ = 0, row0_ = 0;
   int col0_ = 0;  // the stored columns are col0_ .. col0_ + cols_ - 1 around the circle: the azimuth
                   // arc with returns (a solid-state LiDAR's 82 deg, not 360)
-  // rows_ x cols_, nearest return in cm (0 = none): half the memory of floats, far below the margins
-  // (keyframes keep their images for the map's ghost removal).
+  // Per row (relative to row0_): where its pixels are stored, -1 for a row without returns.
+  std::vector<std::int16_t> slot_of_row_;
+  // Stored rows x cols_, nearest return in cm (0 = none): half the memory of floats, far below the
+  // margins (keyframes keep their images for the map's ghost removal).
   std::vector<std::uint16_t> ranges_;
 };
 
