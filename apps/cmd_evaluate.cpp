@@ -1,7 +1,5 @@
 // `mmlio evaluate`: compares an estimated TUM trajectory with ground truth (ATE, RPE per 10 m,
 // end-to-end error, coverage), optionally writing the evaluation figure.
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cmath>
 #include <unordered_set>
@@ -13,11 +11,11 @@
 
 #include "commands.hpp"
 #include "mmlio/core/error.hpp"
-#include "mmlio/core/voxel_key.hpp"
 #include "mmlio/eval/evaluation.hpp"
 #include "mmlio/eval/plot_evaluation.hpp"
 #include "mmlio/io/pcd_io.hpp"
 #include "mmlio/io/trajectory_writer.hpp"
+#include "mmlio/sim/map_score.hpp"
 #include "mmlio/sim/scenarios.hpp"
 #include "mmlio/sim/scene.hpp"
 
@@ -35,72 +33,67 @@ struct EvaluateArgs {
   std::string map_scenario;
   std::string off_surface_path;
   std::string removed_path;
+  std::string reference_map_path;
+  std::string reference_est_path;
   eval::EvalOptions options;
 };
 
 /// How far the points of a map lie from the true static surfaces of a simulated scene, after the
-/// trajectory alignment: median and 90th percentile, the fraction farther than 10 cm (ghosts of
-/// people, blur), and how much static surface the map covers (10 cm voxels holding a point within
-/// 10 cm of a surface; compare runs of the same scene with and without people).
+/// trajectory alignment (sim::scoreMap), and how much of them it keeps: against the static surface
+/// only the removed points cover, and against the map of a run without people.
 struct MapSharpness {
-  std::size_t points = 0;
-  double median_m = 0.0, p90_m = 0.0;
-  double off_surface_fraction = 0.0;
-  std::size_t static_voxels = 0;
-  // Static surface that only the removed points (map_dynamic.pcd) cover: what the dynamic handling
-  // took out of the map, as opposed to what people hid from every view. -1: not asked.
+  sim::MapScore score;
+  // Static surface voxels only the removed points (map_dynamic.pcd) cover: what the dynamic
+  // handling took out of the map, as opposed to what people hid from every view. -1: not asked.
   long static_voxels_removed = -1;
+  double static_kept = -1.0;  // sim::staticPointsKept against the reference map; -1: not asked
 };
 
-constexpr double kOnSurfaceM = 0.1;
+/// A map to compare against, in the ground-truth frame through its own run's alignment.
+struct ReferenceMap {
+  std::string path;
+  Eigen::Isometry3d T_gt_est = Eigen::Isometry3d::Identity();
+};
 
-std::uint64_t surfaceVoxelOf(const Eigen::Vector3d& w) {
-  const auto idx = [](double v) { return static_cast<std::int64_t>(std::floor(v / kOnSurfaceM)); };
-  return packVoxelKey(idx(w.x()), idx(w.y()), idx(w.z()));
+std::vector<Eigen::Vector3d> transformed(const std::vector<Point>& points, const Eigen::Isometry3d& T_gt_est) {
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(points.size());
+  for (const Point& p : points) out.push_back(T_gt_est * p.xyz.cast<double>());
+  return out;
 }
 
 MapSharpness mapSharpness(const std::string& map_path, const std::string& scenario, const Eigen::Isometry3d& T_gt_est,
-                          const std::string& off_surface_path, const std::string& removed_path) {
+                          const std::string& off_surface_path, const std::string& removed_path,
+                          const ReferenceMap& reference) {
   const sim::Scene scene(sim::makeScenario(scenario).boxes);
-  const std::vector<Point> map = io::readPcd(map_path);
-  if (map.empty()) throw Error("evaluate: map '" + map_path + "' has no points");
-  std::vector<double> d(map.size());
-  tbb::parallel_for(std::size_t(0), map.size(), [&](std::size_t i) {
-    d[i] = scene.distanceToSurface(T_gt_est * map[i].xyz.cast<double>());
-  });
-  std::unordered_set<std::uint64_t> voxels;
-  std::vector<Point> off_points;
-  for (std::size_t i = 0; i < map.size(); ++i) {
-    const Eigen::Vector3d w = T_gt_est * map[i].xyz.cast<double>();
-    if (d[i] > kOnSurfaceM) {
-      off_points.push_back(map[i]);
-      off_points.back().xyz = w.cast<float>();
-      continue;
-    }
-    voxels.insert(surfaceVoxelOf(w));
-  }
-  const auto at = [&d](double q) {
-    const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(d.size() - 1));
-    std::nth_element(d.begin(), d.begin() + k, d.end());
-    return d[static_cast<std::size_t>(k)];
-  };
+  const std::vector<Point> points = io::readPcd(map_path);
+  if (points.empty()) throw Error("evaluate: map '" + map_path + "' has no points");
+  const std::vector<Eigen::Vector3d> map = transformed(points, T_gt_est);
   MapSharpness s;
-  s.points = map.size();
-  s.off_surface_fraction = static_cast<double>(off_points.size()) / static_cast<double>(map.size());
-  if (!off_surface_path.empty()) io::writePcdBinary(off_surface_path, off_points);
-  s.static_voxels = voxels.size();
+  s.score = sim::scoreMap(scene, map);
+  if (!off_surface_path.empty()) {
+    std::vector<Point> off;
+    for (std::size_t i : s.score.off_surface) {
+      off.push_back(points[i]);
+      off.back().xyz = map[i].cast<float>();
+    }
+    io::writePcdBinary(off_surface_path, off);
+  }
   if (!removed_path.empty()) {
-    std::unordered_set<std::uint64_t> only_removed;
-    for (const Point& p : io::readPcd(removed_path)) {
-      const Eigen::Vector3d w = T_gt_est * p.xyz.cast<double>();
-      if (scene.distanceToSurface(w) > kOnSurfaceM) continue;
-      const std::uint64_t key = surfaceVoxelOf(w);
-      if (!voxels.count(key)) only_removed.insert(key);
+    std::unordered_set<std::uint64_t> covered, only_removed;
+    for (const Eigen::Vector3d& p : s.score.on_surface) covered.insert(sim::surfaceVoxelOf(p));
+    for (const Eigen::Vector3d& w : transformed(io::readPcd(removed_path), T_gt_est)) {
+      if (scene.distanceToSurface(w) > sim::kOnSurfaceM) continue;
+      const std::uint64_t key = sim::surfaceVoxelOf(w);
+      if (!covered.count(key)) only_removed.insert(key);
     }
     s.static_voxels_removed = static_cast<long>(only_removed.size());
   }
-  s.median_m = at(0.5);
-  s.p90_m = at(0.9);
+  if (!reference.path.empty()) {
+    const sim::MapScore ref = sim::scoreMap(scene, transformed(io::readPcd(reference.path), reference.T_gt_est));
+    if (ref.on_surface.empty()) throw Error("evaluate: reference map '" + reference.path + "' has no static-surface points");
+    s.static_kept = sim::staticPointsKept(s.score.on_surface, ref.on_surface);
+  }
   return s;
 }
 
@@ -162,20 +155,30 @@ void runEvaluate(const EvaluateArgs& args) {
   const eval::EvalResult result = eval::evaluate(gt, est, options);
   if (!args.plot_path.empty()) eval::plotEvaluation(result, args.plot_path);
 
+  ReferenceMap reference;
+  if (!args.reference_map_path.empty()) {
+    reference.path = args.reference_map_path;
+    reference.T_gt_est = eval::evaluate(gt, readNonEmptyTum(args.reference_est_path, "reference"), options).T_gt_est_pose;
+  }
   MapSharpness map;
   if (!args.map_path.empty())
-    map = mapSharpness(args.map_path, args.map_scenario, result.T_gt_est_pose, args.off_surface_path, args.removed_path);
+    map = mapSharpness(args.map_path, args.map_scenario, result.T_gt_est_pose, args.off_surface_path, args.removed_path,
+                       reference);
   if (args.json) {
     std::string line = eval::toJsonLine(result);
     if (!args.map_path.empty() && !line.empty() && line.back() == '}') {
-      char extra[320];
+      char extra[400];
+      char kept[64] = "";
+      if (map.static_kept >= 0.0) std::snprintf(kept, sizeof(kept), ", \"map_static_kept\": %.5f", map.static_kept);
       std::snprintf(extra, sizeof(extra),
                     ", \"map_points\": %zu, \"map_median_m\": %.5f, \"map_p90_m\": %.5f, \"map_off_surface_fraction\": %.5f, "
-                    "\"map_static_voxels\": %zu%s}",
-                    map.points, map.median_m, map.p90_m, map.off_surface_fraction, map.static_voxels,
+                    "\"map_static_voxels\": %zu%s%s}",
+                    map.score.points, map.score.median_m, map.score.p90_m, map.score.off_surface_fraction,
+                    map.score.static_voxels,
                     map.static_voxels_removed < 0
                         ? ""
-                        : (", \"map_static_voxels_removed\": " + std::to_string(map.static_voxels_removed)).c_str());
+                        : (", \"map_static_voxels_removed\": " + std::to_string(map.static_voxels_removed)).c_str(),
+                    kept);
       line.pop_back();
       line += extra;
     }
@@ -183,14 +186,17 @@ void runEvaluate(const EvaluateArgs& args) {
   } else {
     printTable(result, args);
     if (!args.map_path.empty()) {
-      std::cout << row("map points", static_cast<double>(map.points), "", "%.0f");
-      std::cout << row("map to true surfaces", map.median_m, "m median");
-      std::cout << row("map to true surfaces", map.p90_m, "m 90th percentile");
-      std::cout << row("map off surfaces", 100.0 * map.off_surface_fraction, "% of points > 10 cm", "%.2f");
-      std::cout << row("static surface voxels", static_cast<double>(map.static_voxels), "(10 cm)", "%.0f");
+      const sim::MapScore& score = map.score;
+      std::cout << row("map points", static_cast<double>(score.points), "", "%.0f");
+      std::cout << row("map to true surfaces", score.median_m, "m median");
+      std::cout << row("map to true surfaces", score.p90_m, "m 90th percentile");
+      std::cout << row("map off surfaces", 100.0 * score.off_surface_fraction, "% of points > 10 cm", "%.2f");
+      std::cout << row("static surface voxels", static_cast<double>(score.static_voxels), "(10 cm)", "%.0f");
       if (map.static_voxels_removed >= 0)
         std::cout << row("... only removed", static_cast<double>(map.static_voxels_removed), "(only --removed covers)",
                          "%.0f");
+      if (map.static_kept >= 0.0)
+        std::cout << row("static points kept", 100.0 * map.static_kept, "% of the reference map's (within 10 cm)", "%.1f");
     }
     if (!args.plot_path.empty()) std::cout << "  plot                   " << args.plot_path << '\n';
   }
@@ -226,6 +232,16 @@ void registerEvaluateCommand(CLI::App& app) {
                   "cover (what the dynamic handling took out of the map)")
       ->check(CLI::ExistingFile)
       ->needs(cmd->get_option("--map"));
+  cmd->add_option("--reference-map", args->reference_map_path,
+                  "With --map: the map of the same scene run without people (PCD, its run's estimate frame); reports the "
+                  "share of its static-surface points that --map still has within 10 cm")
+      ->check(CLI::ExistingFile)
+      ->needs(cmd->get_option("--map"));
+  cmd->add_option("--reference-est", args->reference_est_path,
+                  "The trajectory of --reference-map's run (TUM), to align that map to --gt")
+      ->check(CLI::ExistingFile);
+  cmd->get_option("--reference-map")->needs(cmd->get_option("--reference-est"));
+  cmd->get_option("--reference-est")->needs(cmd->get_option("--reference-map"));
   cmd->callback([args] { runEvaluate(*args); });
 }
 
