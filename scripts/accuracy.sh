@@ -65,8 +65,9 @@ for sc in scenes:
               f"{f'{statistics.median(e2e):.3f} / {max(e2e):.3f}' if e2e else 'n/a'} | "
               f"{fmt(statistics.median(mp), 1000, 'mm', 1) if mp else 'n/a'} | "
               f"{f'{100 * statistics.median(off):.2f} / {100 * max(off):.2f} %' if off else 'n/a'} | {beat} |")
-# Static surface with people against the same cell without: what the map still covers, and what
-# the dynamic handling removed (static voxels only map_dynamic.pcd covers); the rest people hid.
+# Static surface with people against the same cell without: the share of the empty run's
+# static-surface points the people run still has within 10 cm (map_static_kept, added by
+# score_static_kept), and the static voxels only the removed points (map_dynamic.pcd) cover.
 kept = []
 for r in rows:
     if not r.get("people") or "map_static_voxels" not in r:
@@ -77,12 +78,51 @@ for r in rows:
         kept.append((r, base[0]["map_static_voxels"]))
 if kept:
     print()
-    print("| cell | run | static kept (of the cell without people) | removed by the dynamic handling |")
+    print("| cell | run | static points kept (of the cell without people) | static voxels only the removed points cover |")
     print("|---|---|---|---|")
     for r, empty in kept:
         removed = r.get("map_static_voxels_removed")
-        print(f'| {r["scene"]} s{r["seed"]} n{r["noise"]} | {r["run"]} | {100 * r["map_static_voxels"] / empty:.1f} % | '
+        points = r.get("map_static_kept")
+        print(f'| {r["scene"]} s{r["seed"]} n{r["noise"]} | {r["run"]} | '
+              f'{"n/a" if points is None else f"{100 * points:.1f} %"} | '
               f'{"n/a" if removed is None else f"{100 * removed / empty:.1f} %"} |')
+PY
+}
+
+# Adds map_static_kept to every people run of OUT/results.jsonl whose cell was also run without
+# people (both runs' maps kept), then drops the maps unless KEEP_MAPS=1 was asked for.
+score_static_kept() {
+  python3 - "$1" "$MMLIO" "$USER_KEEPS_MAPS" <<'PY'
+import json, os, subprocess, sys
+out, mmlio, user_keeps = sys.argv[1], sys.argv[2], sys.argv[3] == "1"
+path = os.path.join(out, "results.jsonl")
+rows = [json.loads(l) for l in open(path) if l.strip()]
+def run_dir(r, people):
+    cell = f'{r["scene"]}-s{r["seed"]}-n{r["noise"]}' + (f'-p{people}' if people else "")
+    return os.path.join(out, cell), os.path.join(out, cell, r["run"])
+for r in rows:
+    if not r.get("people") or r.get("status") != "ok":
+        continue
+    cell, rd = run_dir(r, r["people"])
+    _, ref = run_dir(r, 0)
+    files = [os.path.join(rd, "map.pcd"), os.path.join(ref, "map.pcd"), os.path.join(ref, "trajectory.tum")]
+    if not all(os.path.exists(f) for f in files):
+        continue
+    ev = subprocess.run([mmlio, "evaluate", "--gt", os.path.join(cell, f'{r["scene"]}_gt.tum'),
+                         "--est", os.path.join(rd, "trajectory.tum"), "--map", files[0], "--scenario", r["scene"],
+                         "--reference-map", files[1], "--reference-est", files[2], "--json"],
+                        capture_output=True, text=True)
+    if ev.returncode == 0:
+        r["map_static_kept"] = json.loads(ev.stdout)["map_static_kept"]
+with open(path, "w") as f:
+    for r in rows:
+        f.write(json.dumps(r) + "\n")
+if not user_keeps:
+    for r in rows:
+        _, rd = run_dir(r, r.get("people", 0))
+        for name in os.listdir(rd) if os.path.isdir(rd) else []:
+            if name.startswith("map") and name.endswith(".pcd"):
+                os.remove(os.path.join(rd, name))
 PY
 }
 
@@ -94,5 +134,8 @@ command -v bc >/dev/null || { echo "accuracy.sh needs bc (Debian: apt-get instal
 MMLIO="${MMLIO:-build/mmlio}"
 [ -x "$MMLIO" ] || scripts/build.sh --target mmlio
 mkdir -p "$OUT"
+USER_KEEPS_MAPS="${KEEP_MAPS:-0}"
+[ "$PEOPLE" = 0 ] || export KEEP_MAPS=1  # score_static_kept compares the maps with and without people
 jobs "$OUT" | parallel --will-cite -j "$JOBS" --line-buffer > "$OUT/results.jsonl"
+[ "$PEOPLE" = 0 ] || score_static_kept "$OUT"
 summarise "$OUT"

@@ -5,7 +5,8 @@
 # Seed 1: Lissajous (Horizon-like) pattern, nominal mount; even seeds: rosette pattern; seeds >= 2:
 # both extrinsics and the Velodyne sweep phase drawn from the seed.
 # PEOPLE=N (default 0) puts N people walking through the scene (simulate --people N); the map is then
-# also scored for what is off the static surfaces.
+# also scored for what is off the static surfaces. KEEP_MAPS=1 keeps each run's maps (accuracy.sh
+# compares the maps of a cell with people against the same cell without).
 # Usage: scripts/accuracy_job.sh OUT SCENE SEED LEVEL [MODES...]   (modes: hvi vi hi hvi+loop)
 set -euo pipefail
 OUT="$1" SCENE="$2" SEED="$3" LEVEL="$4"
@@ -63,6 +64,6 @@ if os.path.exists(rep):
     row["map_points_removed"] = r.get("dynamic", {}).get("map_points_removed", None)
 print(json.dumps(row))
 PY
-  rm -rf "$rd/map.pcd" "$rd"/map_*.pcd
+  [ "${KEEP_MAPS:-0}" = 1 ] || rm -rf "$rd/map.pcd" "$rd"/map_*.pcd
 done
 [ "${KEEP_BAGS:-0}" = 1 ] || rm -f "$dir/$SCENE.bag"
