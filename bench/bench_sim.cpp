@@ -7,7 +7,7 @@
 namespace {
 
 const mmlio::sim::Simulator& simulator(const std::string& scenario) {
-  static const mmlio::sim::Simulator office({"office", 0, 1, 0}), hall({"hall", 0, 1, 0});
+  static const mmlio::sim::Simulator office(mmlio::sim::fullWalk("office")), hall(mmlio::sim::fullWalk("hall"));
   return scenario == "office" ? office : hall;
 }
 

@@ -51,7 +51,7 @@ void expectClose(const Eigen::Isometry3d& est, const Eigen::Isometry3d& truth) {
 }
 
 TEST(SpatialCalibration, RecoversTheVelodyneMountFromTheNominalConfigGuess) {
-  const sim::Simulator sim(sim::SimOptions{"office", 0, 1, 0});
+  const sim::Simulator sim(sim::fullWalk("office"));
   const Stationary s = stationaryStart(sim);
   // The config preset's placeholder: 0.2 m above the IMU, axes aligned (3 deg yaw, 2.5 deg tilt off).
   Eigen::Isometry3d T_imu_velodyne_nominal = Eigen::Isometry3d::Identity();
@@ -65,7 +65,7 @@ TEST(SpatialCalibration, RecoversTheVelodyneMountFromTheNominalConfigGuess) {
 }
 
 TEST(SpatialCalibration, FindsTheMountByYawSearchWithoutAGuess) {
-  const sim::Simulator sim(sim::SimOptions{"office", 0, 1, 0});
+  const sim::Simulator sim(sim::fullWalk("office"));
   const Stationary s = stationaryStart(sim);
   // A Velodyne mounted turned by 120 deg: the yaw search must find it.
   Eigen::Isometry3d turn = Eigen::Isometry3d::Identity();
@@ -80,8 +80,8 @@ TEST(SpatialCalibration, FindsTheMountByYawSearchWithoutAGuess) {
 }
 
 TEST(SpatialCalibration, RefusesCloudsOfDifferentPlaces) {
-  const sim::Simulator office(sim::SimOptions{"office", 0, 1, 0});
-  const sim::Simulator hall(sim::SimOptions{"hall", 0, 1, 0});
+  const sim::Simulator office(sim::fullWalk("office"));
+  const sim::Simulator hall(sim::fullWalk("hall"));
   const SpatialCalibrationResult r =
       calibrateSpinningToSolid(stationaryStart(office).spinning, stationaryStart(hall).solid, std::nullopt);
   std::printf("%s\n", r.message.c_str());
@@ -90,7 +90,8 @@ TEST(SpatialCalibration, RefusesCloudsOfDifferentPlaces) {
 }
 
 TEST(TimeOffset, RecoversAVelodyneClockOffsetOf70MillisecondsFromTheTurns) {
-  sim::SimOptions options{"office", 0, 1, 0.07};
+  sim::SimOptions options = sim::fullWalk("office");
+  options.velodyne_time_offset_s = 0.07;
   const sim::Simulator sim(options);
   std::vector<LidarScan> sweeps;
   // The first two U-turns (13.5-15.7 s, 26.5-28.3 s), with a second of walking on either side.
@@ -109,7 +110,9 @@ TEST(TimeOffset, RecoversAVelodyneClockOffsetOf70MillisecondsFromTheTurns) {
 }
 
 TEST(TimeOffset, RefusesWhenTheRigDoesNotTurn) {
-  const sim::Simulator sim(sim::SimOptions{"office", 0, 1, 0.07});
+  sim::SimOptions options = sim::fullWalk("office");
+  options.velodyne_time_offset_s = 0.07;
+  const sim::Simulator sim(options);
   std::vector<LidarScan> sweeps;
   for (int k = 0; k < 15; ++k) sweeps.push_back(sim.velodyneSweep(k));  // the stationary start
   const TimeOffsetResult r = estimateTimeOffset(sweepRotations(sweeps), sim.velodyneExtrinsic().T_imu_sensor.linear(),

@@ -96,7 +96,7 @@ class WindowOnSimulation : public ::testing::Test {
             (est.v_world - truth.v_world).norm()};
   }
 
-  sim::Simulator sim_{sim::SimOptions{"office", 0, 1, 0}};
+  sim::Simulator sim_{sim::fullWalk("office")};
   imu::ImuNoise noise_;
   map::VoxelHashMap edge_map_{0.5, 60}, plane_map_{0.5, 60};
   const Eigen::Vector3d g_{0, 0, -9.81};

@@ -13,7 +13,7 @@ namespace mmlio {
 namespace {
 
 struct SweepCase {
-  sim::Simulator sim{sim::SimOptions{"hall", 0, 1, 0}};
+  sim::Simulator sim{sim::fullWalk("hall")};
   int k = 29;  // true start 2.937 s: the turn is at full rate
   LidarScan scan = sim.velodyneSweep(k);
   Stamp start_ns = sim.velodyneTrueStartNs(k);

@@ -70,7 +70,9 @@ TEST(People, BothLidarsSeeThePeopleAndTheGroundTruthLabelsTheirReturns) {
           for (int j = 0; j < sim.crowd().size(); ++j)
             nearest = std::min(nearest, distanceToBox(sim.crowd().boxAt(j, t0 + p.time_s), w));
           EXPECT_LT(nearest, 0.08);
-          if (w.z() > 0.2) EXPECT_GT(sim.scene().distanceToSurface(w), 0.05);  // not on a wall
+          if (w.z() > 0.2) {
+            EXPECT_GT(sim.scene().distanceToSurface(w), 0.05);  // not on a wall
+          }
         } else {
           EXPECT_LT(sim.scene().distanceToSurface(w), 0.08);
         }

@@ -18,6 +18,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "mmlio/core/types.hpp"
@@ -55,6 +56,13 @@ struct SimOptions {
   bool livox_no_returns_as_zero = false;  // beams without a return become (0,0,0) points, as the Livox driver does
   int people = 0;                       // people walking through the scene (see people.hpp), paths from the seed
 };
+
+/// A scenario's full walk with every other option at its default.
+inline SimOptions fullWalk(std::string scenario) {
+  SimOptions o;
+  o.scenario = std::move(scenario);
+  return o;
+}
 
 class Simulator {
  public:
