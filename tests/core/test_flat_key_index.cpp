@@ -4,6 +4,7 @@
 
 #include <random>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "mmlio/core/flat_key_index.hpp"
 #include "mmlio/core/voxel_key.hpp"
@@ -43,6 +44,23 @@ TEST(FlatKeyIndex, SetInsertsOnceAndFindsItsKeys) {
   EXPECT_TRUE(set.contains(packVoxelKey(-1, 2, -3)));
   EXPECT_FALSE(set.contains(packVoxelKey(1, 2, 3)));
   EXPECT_EQ(set.size(), 2u);
+}
+
+TEST(FlatKeyIndex, SetAnswersAsAnUnorderedSetThroughGrowthForAnyKey) {
+  std::mt19937_64 rng(11);
+  FlatKeySet set;
+  std::unordered_set<std::uint64_t> reference;
+  for (int i = 0; i < 20000; ++i) {
+    // Every 64-bit key, the all-ones one (the free-slot marker) included, and many repeats.
+    const std::uint64_t key = i % 1000 == 0 ? ~std::uint64_t{0} : rng() % 30000;
+    ASSERT_EQ(set.insert(key), reference.insert(key).second) << key;
+  }
+  EXPECT_EQ(set.size(), reference.size());
+  for (std::uint64_t key = 0; key < 40000; ++key) ASSERT_EQ(set.contains(key), reference.count(key) > 0) << key;
+  EXPECT_TRUE(set.contains(~std::uint64_t{0}));
+  set.clear();
+  EXPECT_FALSE(set.contains(~std::uint64_t{0}));
+  EXPECT_TRUE(set.empty());
 }
 
 }  // namespace mmlio

@@ -51,6 +51,7 @@ class FlatKeyIndex {
   };
   static constexpr std::size_t kInitialSlots = 1024;
 
+  friend class FlatKeySet;
   // splitmix64 finaliser: neighbouring voxels land in unrelated slots.
   static std::size_t slotOf(std::uint64_t h) {
     h ^= h >> 30;
@@ -72,18 +73,60 @@ class FlatKeyIndex {
   std::size_t size_ = 0;
 };
 
-/// A set of 64-bit keys on FlatKeyIndex.
+/// A set of 64-bit keys, open addressing like FlatKeyIndex but 8 bytes per slot instead of 16:
+/// the back end's voxel sets hold a key per 5 cm of mapped surface (millions in a hall).
 class FlatKeySet {
  public:
+  FlatKeySet() { clear(); }
   /// True when key was not in the set yet.
-  bool insert(std::uint64_t key) { return index_.insert(key, 0).second; }
-  bool contains(std::uint64_t key) const { return index_.find(key) != FlatKeyIndex::kNone; }
-  std::size_t size() const { return index_.size(); }
-  bool empty() const { return index_.empty(); }
-  void clear() { index_.clear(); }
+  bool insert(std::uint64_t key) {
+    if (key == kEmpty) return !std::exchange(has_empty_key_, true);
+    if (2 * (size_ + 1) > slots_.size()) grow();
+    const std::size_t mask = slots_.size() - 1;
+    for (std::size_t i = FlatKeyIndex::slotOf(key) & mask;; i = (i + 1) & mask) {
+      if (slots_[i] == kEmpty) {
+        slots_[i] = key;
+        ++size_;
+        return true;
+      }
+      if (slots_[i] == key) return false;
+    }
+  }
+  bool contains(std::uint64_t key) const {
+    if (key == kEmpty) return has_empty_key_;
+    const std::size_t mask = slots_.size() - 1;
+    for (std::size_t i = FlatKeyIndex::slotOf(key) & mask;; i = (i + 1) & mask) {
+      if (slots_[i] == key) return true;
+      if (slots_[i] == kEmpty) return false;
+    }
+  }
+  std::size_t size() const { return size_ + (has_empty_key_ ? 1 : 0); }
+  bool empty() const { return size() == 0; }
+  void clear() {
+    slots_.assign(kInitialSlots, kEmpty);
+    size_ = 0;
+    has_empty_key_ = false;
+  }
 
  private:
-  FlatKeyIndex index_;
+  // Marks a free slot; the key with this value (never a packed voxel key: those use 63 bits) is
+  // kept in has_empty_key_.
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+  static constexpr std::size_t kInitialSlots = 1024;
+
+  void grow() {
+    std::vector<std::uint64_t> old(slots_.size() * 2, kEmpty);
+    old.swap(slots_);
+    size_ = 0;
+    const bool had_empty_key = has_empty_key_;
+    for (std::uint64_t key : old)
+      if (key != kEmpty) insert(key);
+    has_empty_key_ = had_empty_key;
+  }
+
+  std::vector<std::uint64_t> slots_;
+  std::size_t size_ = 0;  // keys in slots_
+  bool has_empty_key_ = false;
 };
 
 }  // namespace mmlio
