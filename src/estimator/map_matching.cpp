@@ -7,6 +7,7 @@
 
 #include <algorithm>
 
+#include "mmlio/core/so3.hpp"
 #include "mmlio/estimator/lidar_factors.hpp"
 #include "mmlio/map/geometry_fit.hpp"
 
@@ -64,6 +65,73 @@ double matchDistance(const MapMatch& m, const Eigen::Isometry3d& T_world_body) {
 ceres::CostFunction* mapMatchCost(const MapMatch& m, double weight) {
   if (m.kind == MapMatch::Kind::kPlane) return new PointToPlaneFactor(m.p_body, m.a, m.b.x(), weight);
   return new PointToEdgeFactor(m.p_body, m.a, m.b, weight);
+}
+
+MapMatchesFactor::MapMatchesFactor(const std::vector<MapMatch>& matches, double weight, double huber)
+    : huber_(huber) {
+  for (const MapMatch& m : matches) {
+    if (m.kind == MapMatch::Kind::kPlane) {
+      planes_.push_back({m.p_body, weight * m.a, weight * m.b.x()});
+    } else {
+      const Eigen::Vector3d u = m.b.normalized();
+      edges_.push_back({m.p_body, m.a, weight * (Eigen::Matrix3d::Identity() - u * u.transpose())});
+    }
+  }
+  set_num_residuals(static_cast<int>(planes_.size() + 3 * edges_.size()));
+  mutable_parameter_block_sizes()->push_back(7);
+}
+
+bool MapMatchesFactor::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
+  const Eigen::Map<const Eigen::Vector3d> t(parameters[0]);
+  const Eigen::Matrix3d R = Eigen::Map<const Eigen::Quaterniond>(parameters[0] + 3).normalized().toRotationMatrix();
+  double* J = jacobians ? jacobians[0] : nullptr;
+  const double h = huber_;
+  for (std::size_t i = 0; i < planes_.size(); ++i) {
+    const Plane& m = planes_[i];
+    const Eigen::Vector3d Rp = R * m.p_body;
+    const double r = m.normal.dot(Rp + t) + m.d;
+    // Beyond the Huber scale: r' = sign(r) sqrt(2 h |r| - h^2), dr'/dr = h / |r'|.
+    double scale = 1.0;
+    if (std::abs(r) > h) {
+      const double f = std::sqrt(2.0 * h * std::abs(r) - h * h);
+      residuals[i] = std::copysign(f, r);
+      scale = h / f;
+    } else {
+      residuals[i] = r;
+    }
+    if (J) {
+      // Right perturbation q <- q Exp(dtheta): d(R p) = -R [p]x dtheta, so d(n . R p) = (p x R^T n) . dtheta.
+      Eigen::Map<Eigen::Matrix<double, 1, 7>> row(J + 7 * i);
+      row.head<3>() = scale * m.normal;
+      row.segment<3>(3) = scale * (m.p_body.cross(R.transpose() * m.normal));
+      row(6) = 0.0;
+    }
+  }
+  const std::size_t base = planes_.size();
+  for (std::size_t k = 0; k < edges_.size(); ++k) {
+    const Edge& m = edges_[k];
+    Eigen::Map<Eigen::Vector3d> r(residuals + base + 3 * k);
+    r = m.perp * (R * m.p_body + t - m.line_point);
+    Eigen::Matrix<double, 3, 6> Jr;
+    if (J) {
+      Jr.leftCols<3>() = m.perp;
+      Jr.rightCols<3>() = -m.perp * R * so3::hat(m.p_body);
+    }
+    const double n = r.norm();
+    if (n > h) {
+      // r' = g r with g = f / n, f = sqrt(2 h n - h^2): dr' = g dr + r (g' / n) r^T dr.
+      const double f = std::sqrt(2.0 * h * n - h * h);
+      const double g = f / n, c = (h / f) / (n * n) - f / (n * n * n);
+      if (J) Jr = g * Jr + c * r * (r.transpose() * Jr);
+      r *= g;
+    }
+    if (J) {
+      Eigen::Map<Eigen::Matrix<double, 3, 7, Eigen::RowMajor>> rows(J + 7 * (base + 3 * k));
+      rows.leftCols<6>() = Jr;
+      rows.col(6).setZero();
+    }
+  }
+  return true;
 }
 
 }  // namespace mmlio::estimator

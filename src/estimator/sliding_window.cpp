@@ -53,9 +53,7 @@ void addMapResiduals(ceres::Problem& problem, double* pose, const std::vector<Ma
                      double huber_m) {
   if (matches.empty()) return;
   const double w = 1.0 / sigma_m;
-  // One loss shared by all of this pose's residuals: the problem deletes each distinct loss once.
-  ceres::LossFunction* loss = new ceres::HuberLoss(huber_m * w);
-  for (const MapMatch& m : matches) problem.AddResidualBlock(mapMatchCost(m, w), loss, pose);
+  problem.AddResidualBlock(new MapMatchesFactor(matches, w, huber_m * w), nullptr, pose);
 }
 
 SlidingWindow::SlidingWindow(SlidingWindowConfig cfg, const Eigen::Vector3d& g_world)

@@ -8,6 +8,7 @@
 
 #include "mmlio/core/so3.hpp"
 #include "mmlio/estimator/lidar_factors.hpp"
+#include "mmlio/estimator/map_matching.hpp"
 #include "mmlio/estimator/pose_manifold.hpp"
 
 namespace mmlio::estimator {
@@ -131,6 +132,70 @@ TEST(PointToEdgeFactor, AnalyticJacobianMatchesNumericInTangentSpace) {
   const auto Ja = analyticJacobian(f, x);
   const Eigen::MatrixXd Jn = numericTangentJacobian(f, x);
   EXPECT_LT((Ja.leftCols<6>() - Jn).norm(), 1e-6) << Ja << "\n" << Jn;
+  EXPECT_EQ(Ja.col(6).norm(), 0.0);
+}
+
+/// Planes and edges 0-25 cm from where pose x puts their points: at weight 4 about half of
+/// them lie beyond a Huber scale of 0.5 (whitened).
+std::vector<MapMatch> mixedMatches(const Pose& x) {
+  const Eigen::Isometry3d T = blockToPose(x.data());
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> U(-3.0, 3.0), offset(-0.25, 0.25);
+  std::vector<MapMatch> matches;
+  for (int i = 0; i < 30; ++i) {
+    MapMatch m;
+    m.kind = i % 3 == 2 ? MapMatch::Kind::kEdge : MapMatch::Kind::kPlane;
+    m.p_body = {U(rng), U(rng), U(rng)};
+    const Eigen::Vector3d q = T * m.p_body;
+    if (m.kind == MapMatch::Kind::kPlane) {
+      m.a = Eigen::Vector3d(U(rng), U(rng), U(rng)).normalized();
+      m.b = Eigen::Vector3d(-m.a.dot(q) + offset(rng), 0, 0);
+    } else {
+      m.a = q + Eigen::Vector3d(offset(rng), offset(rng), offset(rng));
+      m.b = Eigen::Vector3d(U(rng), U(rng), 1.0);
+    }
+    matches.push_back(m);
+  }
+  return matches;
+}
+
+TEST(MapMatchesFactor, CostAndGradientAreThoseOfOneHuberRobustResidualPerMatch) {
+  const Pose x = makePose({0.1, -0.2, 0.05}, {0.02, -0.01, 0.03});
+  const std::vector<MapMatch> matches = mixedMatches(x);
+  const double weight = 4.0, huber = 0.5;
+  const MapMatchesFactor batched(matches, weight, huber);
+  const auto Jb = analyticJacobian(batched, x);
+  Eigen::VectorXd rb(batched.num_residuals());
+  const double* params[] = {x.data()};
+  batched.Evaluate(params, rb.data(), nullptr);
+
+  const ceres::HuberLoss loss(huber);
+  double cost = 0.0;
+  Eigen::Matrix<double, 6, 1> gradient = Eigen::Matrix<double, 6, 1>::Zero();
+  int beyond = 0;
+  for (const MapMatch& m : matches) {
+    const std::unique_ptr<ceres::CostFunction> one(mapMatchCost(m, weight));
+    const auto J = analyticJacobian(*one, x);
+    Eigen::VectorXd r(one->num_residuals());
+    one->Evaluate(params, r.data(), nullptr);
+    double rho[3];
+    loss.Evaluate(r.squaredNorm(), rho);
+    cost += rho[0];
+    gradient += rho[1] * J.leftCols<6>().transpose() * r;
+    beyond += r.norm() > huber;
+  }
+  ASSERT_GT(beyond, 5);  // the loss is exercised
+  ASSERT_LT(beyond, 25);
+  EXPECT_NEAR(rb.squaredNorm(), cost, 1e-9 * cost);
+  EXPECT_LT((Jb.leftCols<6>().transpose() * rb - gradient).norm(), 1e-9 * gradient.norm());
+}
+
+TEST(MapMatchesFactor, AnalyticJacobianMatchesNumericInTangentSpace) {
+  const Pose x = makePose({0.1, -0.2, 0.05}, {0.02, -0.01, 0.03});
+  const MapMatchesFactor batched(mixedMatches(x), 4.0, 0.5);
+  const auto Ja = analyticJacobian(batched, x);
+  const Eigen::MatrixXd Jn = numericTangentJacobian(batched, x);
+  EXPECT_LT((Ja.leftCols<6>() - Jn).norm(), 1e-5 * Jn.norm());
   EXPECT_EQ(Ja.col(6).norm(), 0.0);
 }
 

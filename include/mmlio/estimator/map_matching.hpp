@@ -52,4 +52,30 @@ double matchDistance(const MapMatch& m, const Eigen::Isometry3d& T_world_body);
 /// The point-to-plane / point-to-edge residual of a match on one pose block, whitened by weight.
 ceres::CostFunction* mapMatchCost(const MapMatch& m, double weight);
 
+/// All matches of one pose as ONE residual block (1 row per plane, 3 per edge, whitened by
+/// weight), each match robust with its own Huber loss of scale huber (whitened units). Ceres'
+/// per-block overhead (a call, Jacobian bookkeeping, the loss correction) cost more than the
+/// residuals themselves when a sweep has thousands of matches. The loss is applied as
+/// r' = sqrt(rho(|r|^2)) r / |r|, so |r'|^2 is exactly the robust cost and the Gauss-Newton
+/// model is that of the robust cost (Ceres' own correction differs only in the curvature it
+/// gives a match beyond the Huber scale: half of it far out, the same at the scale).
+class MapMatchesFactor final : public ceres::CostFunction {
+ public:
+  MapMatchesFactor(const std::vector<MapMatch>& matches, double weight, double huber);
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
+
+ private:
+  struct Plane {
+    Eigen::Vector3d p_body, normal;  // normal and d carry the weight
+    double d;
+  };
+  struct Edge {
+    Eigen::Vector3d p_body, line_point;
+    Eigen::Matrix3d perp;  // weight * (I - u u^T)
+  };
+  std::vector<Plane> planes_;
+  std::vector<Edge> edges_;
+  double huber_;
+};
+
 }  // namespace mmlio::estimator

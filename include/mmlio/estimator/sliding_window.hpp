@@ -52,7 +52,7 @@ struct SlidingWindowConfig {
 /// Solver options shared by the odometry's problems (small, dense, one thread).
 ceres::Solver::Options odometrySolverOptions(int max_iterations);
 
-/// Adds one whitened, Huber-robust residual per match on `pose`.
+/// Adds the matches of `pose` as one residual block (MapMatchesFactor): whitened, Huber-robust per match.
 void addMapResiduals(ceres::Problem& problem, double* pose, const std::vector<MapMatch>& matches, double sigma_m,
                      double huber_m);
 
