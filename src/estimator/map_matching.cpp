@@ -92,7 +92,7 @@ bool MapMatchesFactor::Evaluate(double const* const* parameters, double* residua
     const double r = m.normal.dot(Rp + t) + m.d;
     // Beyond the Huber scale: r' = sign(r) sqrt(2 h |r| - h^2), dr'/dr = h / |r'|.
     double scale = 1.0;
-    if (std::abs(r) > h) {
+    if (h > 0.0 && std::abs(r) > h) {
       const double f = std::sqrt(2.0 * h * std::abs(r) - h * h);
       residuals[i] = std::copysign(f, r);
       scale = h / f;
@@ -118,7 +118,7 @@ bool MapMatchesFactor::Evaluate(double const* const* parameters, double* residua
       Jr.rightCols<3>() = -m.perp * R * so3::hat(m.p_body);
     }
     const double n = r.norm();
-    if (n > h) {
+    if (h > 0.0 && n > h) {
       // r' = g r with g = f / n, f = sqrt(2 h n - h^2): dr' = g dr + r (g' / n) r^T dr.
       const double f = std::sqrt(2.0 * h * n - h * h);
       const double g = f / n, c = (h / f) / (n * n) - f / (n * n * n);

@@ -72,8 +72,8 @@ RangeImage::RangeImage(const std::vector<Point>& points, const RangeImageConfig&
   // Only rows with returns are stored: a spinning LiDAR's 16 rings fill 16 of the ~60 rows its
   // 30 deg span covers at 0.5 deg.
   slot_of_row_.assign(static_cast<std::size_t>(rows_), -1);
-  for (const Cell& c : cells) slot_of_row_[static_cast<std::size_t>(c.row - lo)] = 0;
-  int stored = 0;
+  for (const Cell& c : cells) slot_of_row_[static_cast<std::size_t>(c.row - lo)] = 0;  // has returns ...
+  int stored = 0;  // ... numbered in order
   for (std::int16_t& slot : slot_of_row_)
     if (slot == 0) slot = static_cast<std::int16_t>(stored++);
   ranges_.assign(static_cast<std::size_t>(stored) * static_cast<std::size_t>(cols_), 0);

@@ -53,7 +53,7 @@ double matchDistance(const MapMatch& m, const Eigen::Isometry3d& T_world_body);
 ceres::CostFunction* mapMatchCost(const MapMatch& m, double weight);
 
 /// All matches of one pose as ONE residual block (1 row per plane, 3 per edge, whitened by
-/// weight), each match robust with its own Huber loss of scale huber (whitened units). Ceres'
+/// weight), each match robust with its own Huber loss of scale huber (whitened units; <= 0: none). Ceres'
 /// per-block overhead (a call, Jacobian bookkeeping, the loss correction) cost more than the
 /// residuals themselves when a sweep has thousands of matches. The loss is applied as
 /// r' = sqrt(rho(|r|^2)) r / |r|, so |r'|^2 is exactly the robust cost and the Gauss-Newton
