@@ -2,7 +2,6 @@
 // end-to-end error, coverage), optionally writing the evaluation figure.
 #include <algorithm>
 #include <cmath>
-#include <unordered_set>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -11,6 +10,7 @@
 
 #include "commands.hpp"
 #include "mmlio/core/error.hpp"
+#include "mmlio/core/flat_key_index.hpp"
 #include "mmlio/eval/evaluation.hpp"
 #include "mmlio/eval/plot_evaluation.hpp"
 #include "mmlio/io/pcd_io.hpp"
@@ -80,12 +80,12 @@ MapSharpness mapSharpness(const std::string& map_path, const std::string& scenar
     io::writePcdBinary(off_surface_path, off);
   }
   if (!removed_path.empty()) {
-    std::unordered_set<std::uint64_t> covered, only_removed;
+    FlatKeySet covered, only_removed;
     for (const Eigen::Vector3d& p : s.score.on_surface) covered.insert(sim::surfaceVoxelOf(p));
     for (const Eigen::Vector3d& w : transformed(io::readPcd(removed_path), T_gt_est)) {
       if (scene.distanceToSurface(w) > sim::kOnSurfaceM) continue;
       const std::uint64_t key = sim::surfaceVoxelOf(w);
-      if (!covered.count(key)) only_removed.insert(key);
+      if (!covered.contains(key)) only_removed.insert(key);
     }
     s.static_voxels_removed = static_cast<long>(only_removed.size());
   }

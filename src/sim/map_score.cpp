@@ -4,8 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <unordered_set>
 
+#include "mmlio/core/flat_key_index.hpp"
 #include "mmlio/core/voxel_key.hpp"
 #include "mmlio/map/kd_tree.hpp"
 
@@ -22,7 +22,7 @@ MapScore scoreMap(const Scene& scene, const std::vector<Eigen::Vector3d>& map) {
   if (map.empty()) return s;
   std::vector<double> d(map.size());
   tbb::parallel_for(std::size_t(0), map.size(), [&](std::size_t i) { d[i] = scene.distanceToSurface(map[i]); });
-  std::unordered_set<std::uint64_t> voxels;
+  FlatKeySet voxels;
   for (std::size_t i = 0; i < map.size(); ++i) {
     if (d[i] > kOnSurfaceM) {
       s.off_surface.push_back(i);
