@@ -76,20 +76,22 @@ void BM_VoxelDownsample20cm(benchmark::State& state) {
 }
 BENCHMARK(BM_VoxelDownsample20cm)->Unit(benchmark::kMillisecond);
 
-// Local map of 200k points on a floor and a 5 m grid of walls over 40 x 40 m (~30 points/m^2,
-// sparse like a downsampled feature map); 5-NN within 1 m, per query. Arg: voxel edge in cm.
+// Local map of points on a floor and a 5 m grid of walls over 40 x 40 m; 5-NN within 1 m, per
+// query. Args: voxel edge in cm, points per voxel at most, thousands of points (200: ~30 points/m^2,
+// sparse like one downsampled sweep; 1200: the odometry's 0.5 m voxels full at 60, as in a hall
+// after many keyframes).
 void BM_VoxelHashMapKnn(benchmark::State& state) {
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> u(-20.0, 20.0), h(-1.5, 2.5);
   std::vector<Eigen::Vector3d> pts;
   // Points on a set of walls and a floor: a map-like surface distribution.
-  for (int i = 0; i < 200000; ++i) {
+  for (int i = 0; i < 1000 * state.range(2); ++i) {
     const int kind = i % 4;
     if (kind == 0) pts.emplace_back(u(rng), u(rng), -1.5);
     else if (kind == 1) pts.emplace_back(std::round(u(rng) / 5) * 5, u(rng), h(rng));
     else pts.emplace_back(u(rng), std::round(u(rng) / 5) * 5, h(rng));
   }
-  map::VoxelHashMap m(0.01 * static_cast<double>(state.range(0)), 20);
+  map::VoxelHashMap m(0.01 * static_cast<double>(state.range(0)), static_cast<int>(state.range(1)));
   m.add(pts);
   std::vector<Eigen::Vector3d> queries(4096);
   for (std::size_t k = 0; k < queries.size(); ++k) {
@@ -102,7 +104,12 @@ void BM_VoxelHashMapKnn(benchmark::State& state) {
   }
   state.counters["map_points"] = static_cast<double>(m.size());
 }
-BENCHMARK(BM_VoxelHashMapKnn)->Arg(20)->Arg(50)->Arg(100)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_VoxelHashMapKnn)
+    ->Args({20, 20, 200})
+    ->Args({50, 20, 200})
+    ->Args({100, 20, 200})
+    ->Args({50, 60, 1200})
+    ->Unit(benchmark::kMicrosecond);
 
 void BM_VoxelHashMapAdd(benchmark::State& state) {
   const LidarScan scan = synth::vlp16Room(synth::BoxRoom{}, 0.01);

@@ -113,24 +113,21 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
   if (k <= 0 || voxels_.empty() || max_dist_m <= 0) return 0;
   const double max_d2 = max_dist_m * max_dist_m;
   const Key c = keyOf(q);
-  // Candidates (squared distance, point), kept as a max-heap of the k best.
+  // The k best candidates (squared distance, point), nearest first. k is small (5 for a plane fit):
+  // shifting a sorted array costs less than keeping a heap.
   // Reused per thread: a query allocates nothing (queries run millions of times per run).
   thread_local std::vector<std::pair<double, const Eigen::Vector3d*>> best;
   best.clear();
-  best.reserve(static_cast<std::size_t>(k) + 1);
-  const auto cmp = [](const auto& a, const auto& b) { return a.first < b.first; };
+  best.reserve(static_cast<std::size_t>(k));
+  const auto full = [&] { return static_cast<int>(best.size()) == k; };
   const auto visit = [&](const std::vector<Eigen::Vector3d>& points) {
     for (const auto& p : points) {
       const double d2 = (p - q).squaredNorm();
-      if (d2 > max_d2) continue;
-      if (static_cast<int>(best.size()) < k) {
-        best.emplace_back(d2, &p);
-        std::push_heap(best.begin(), best.end(), cmp);
-      } else if (d2 < best.front().first) {
-        std::pop_heap(best.begin(), best.end(), cmp);
-        best.back() = {d2, &p};
-        std::push_heap(best.begin(), best.end(), cmp);
-      }
+      if (full() ? d2 >= best.back().first : d2 > max_d2) continue;
+      if (!full()) best.emplace_back();
+      std::size_t i = best.size() - 1;
+      for (; i > 0 && best[i - 1].first > d2; --i) best[i] = best[i - 1];
+      best[i] = {d2, &p};
     }
   };
   // After scanning Chebyshev rings 0..r, every unscanned point is at least r voxels away from q.
@@ -158,19 +155,18 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
             // A voxel that cannot hold a point nearer than the current k-th best (or within
             // max_dist_m) is not looked up: the hash lookups are most of the cost of a query.
             const double gap2 = gxy + axisGap(q.z(), c.z, dz);
-            if (gap2 > max_d2 || (static_cast<int>(best.size()) == k && gap2 >= best.front().first)) continue;
+            if (gap2 > max_d2 || (full() && gap2 >= best.back().first)) continue;
             const std::uint32_t v = find(Key{c.x + dx, c.y + dy, c.z + dz});
             if (v != kNone) visit(voxels_[v].points);
           }
         }
       }
-      if (r >= 1 && static_cast<int>(best.size()) == k) {
+      if (r >= 1 && full()) {
         const double covered = r * voxel_m_;
-        if (best.front().first <= covered * covered) break;
+        if (best.back().first <= covered * covered) break;
       }
     }
   }
-  std::sort_heap(best.begin(), best.end(), cmp);
   out->reserve(best.size());
   for (const auto& b : best) out->push_back(*b.second);
   return static_cast<int>(out->size());
