@@ -63,7 +63,7 @@ const ScanContext& LoopCloser::descriptor(const PoseGraph& graph, int i) const {
 }
 
 LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, int match,
-                                            const Eigen::Isometry3d& prior, bool bound_correction) const {
+                                            const Eigen::Isometry3d& prior, bool by_distance) const {
   Verification v;
   // Target: keyframes around the match, in the match's body frame, all old enough.
   const Stamp latest = graph.node(query).stamp_ns - fromSec(cfg_.min_time_gap_s);
@@ -78,6 +78,21 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
   const IcpTarget target(map::voxelCentroids(submap, cfg_.submap_voxel_m));
   const auto& source = graph.node(query).cloud_body;
 
+  // A distance candidate's prior is close to the alignment, which changes the weakest direction's
+  // information only a little: a place that is clearly degenerate at the prior is rejected
+  // without the ICP (in a corridor, most candidates). Descriptor priors (yaw only) are not.
+  if (by_distance && cfg_.prior_eigenvalue_fraction > 0) {
+    IcpConfig at_prior = icp_;
+    at_prior.levels = 1;
+    at_prior.max_iterations_per_level = 0;  // only the final statistics, at the prior
+    const IcpResult probe = alignPointToPlane(source, target, prior, at_prior);
+    const double floor = cfg_.prior_eigenvalue_fraction * cfg_.min_translation_eigenvalue;
+    if (probe.converged && probe.min_translation_eigenvalue < floor) {
+      v.icp = probe;
+      v.reason = "degenerate geometry at the prior (translation eigenvalue " + fmt(probe.min_translation_eigenvalue) + ")";
+      return v;
+    }
+  }
   v.icp = alignPointToPlane(source, target, prior, icp_);
   const IcpResult& r = v.icp;
   if (!r.converged) {
@@ -96,7 +111,7 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
     v.reason = "degenerate geometry (translation eigenvalue " + fmt(r.min_translation_eigenvalue) + ")";
     return v;
   }
-  if (bound_correction) {
+  if (by_distance) {
     const Eigen::Isometry3d correction = prior.inverse() * r.T_target_source;
     const double angle_deg = Eigen::AngleAxisd(correction.rotation()).angle() * kRadToDeg;
     if (correction.translation().norm() > cfg_.max_correction_m || angle_deg > cfg_.max_correction_deg) {

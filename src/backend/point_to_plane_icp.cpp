@@ -1,8 +1,9 @@
 #include "mmlio/backend/point_to_plane_icp.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
-#include <unordered_map>
+#include <cstdint>
 
 #include "mmlio/core/so3.hpp"
 #include "mmlio/map/kd_tree.hpp"
@@ -21,32 +22,32 @@ double geometric(double a, double b, int level, int levels) {
 }  // namespace
 
 struct IcpTarget::Impl {
+  enum Normal : std::uint8_t { kUnknown, kPlane, kNone };
   std::vector<Eigen::Vector3d> points;
+  std::size_t normal_neighbours = 10;
+  double min_patch_width_m = 0.04;
+  // Normals are fitted on first use: an alignment touches only the target points nearest to its
+  // source, and a loop check that stops early touches few of them.
   std::vector<Eigen::Vector3d> normals;
-  std::vector<char> has_normal;
+  std::vector<Normal> normal_state;
   CloudAdaptor adaptor{nullptr};
   std::unique_ptr<KdTree> tree;
-};
 
-IcpTarget::IcpTarget(std::vector<Eigen::Vector3d> points, int normal_neighbours, double min_patch_width_m) : impl_(std::make_unique<Impl>()) {
-  Impl& m = *impl_;
-  m.points = std::move(points);
-  m.adaptor.pts = &m.points;
-  m.tree = std::make_unique<KdTree>(3, m.adaptor, map::kdTreeParams());
-  m.normals.assign(m.points.size(), Eigen::Vector3d::UnitZ());
-  m.has_normal.assign(m.points.size(), 0);
-  const std::size_t k = static_cast<std::size_t>(std::max(3, normal_neighbours));
-  if (m.points.size() < k) return;
-  std::vector<std::uint32_t> idx(k);
-  std::vector<double> d2(k);
-  for (std::size_t i = 0; i < m.points.size(); ++i) {
-    const std::size_t n = m.tree->knnSearch(m.points[i].data(), k, idx.data(), d2.data());
+  void fitNormal(std::size_t i) {
+    normal_state[i] = kNone;
+    const std::size_t k = normal_neighbours;
+    if (points.size() < k) return;
+    thread_local std::vector<std::uint32_t> idx;
+    thread_local std::vector<double> d2;
+    idx.resize(k);
+    d2.resize(k);
+    const std::size_t n = tree->knnSearch(points[i].data(), k, idx.data(), d2.data());
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (std::size_t j = 0; j < n; ++j) mean += m.points[idx[j]];
+    for (std::size_t j = 0; j < n; ++j) mean += points[idx[j]];
     mean /= static_cast<double>(n);
     Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
     for (std::size_t j = 0; j < n; ++j) {
-      const Eigen::Vector3d d = m.points[idx[j]] - mean;
+      const Eigen::Vector3d d = points[idx[j]] - mean;
       cov += d * d.transpose();
     }
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
@@ -57,10 +58,25 @@ IcpTarget::IcpTarget(std::vector<Eigen::Vector3d> points, int normal_neighbours,
     // an arbitrary "normal".
     const double width_sq = min_patch_width_m * min_patch_width_m * static_cast<double>(n);
     if (ev(0) < 0.1 * ev(1) && ev(1) > width_sq) {
-      m.normals[i] = es.eigenvectors().col(0);
-      m.has_normal[i] = 1;
+      normals[i] = es.eigenvectors().col(0);
+      normal_state[i] = kPlane;
     }
   }
+  bool hasNormal(std::size_t i) {
+    if (normal_state[i] == kUnknown) fitNormal(i);
+    return normal_state[i] == kPlane;
+  }
+};
+
+IcpTarget::IcpTarget(std::vector<Eigen::Vector3d> points, int normal_neighbours, double min_patch_width_m) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.points = std::move(points);
+  m.normal_neighbours = static_cast<std::size_t>(std::max(3, normal_neighbours));
+  m.min_patch_width_m = min_patch_width_m;
+  m.adaptor.pts = &m.points;
+  m.tree = std::make_unique<KdTree>(3, m.adaptor, map::kdTreeParams());
+  m.normals.assign(m.points.size(), Eigen::Vector3d::UnitZ());
+  m.normal_state.assign(m.points.size(), Impl::kUnknown);
 }
 
 IcpTarget::~IcpTarget() = default;
@@ -69,8 +85,11 @@ IcpTarget& IcpTarget::operator=(IcpTarget&&) noexcept = default;
 
 std::size_t IcpTarget::size() const { return impl_->points.size(); }
 const std::vector<Eigen::Vector3d>& IcpTarget::points() const { return impl_->points; }
-const Eigen::Vector3d& IcpTarget::normal(std::size_t i) const { return impl_->normals[i]; }
-bool IcpTarget::hasNormal(std::size_t i) const { return impl_->has_normal[i] != 0; }
+const Eigen::Vector3d& IcpTarget::normal(std::size_t i) const {
+  impl_->hasNormal(i);
+  return impl_->normals[i];
+}
+bool IcpTarget::hasNormal(std::size_t i) const { return impl_->hasNormal(i); }
 
 int IcpTarget::nearest(const Eigen::Vector3d& q, double* dist_sq) const {
   if (impl_->points.empty()) return -1;

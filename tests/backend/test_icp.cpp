@@ -68,6 +68,21 @@ TEST(PointToPlaneIcp, FlagsAFeaturelessCorridorAsDegenerateAlongItsAxis) {
   EXPECT_GT(std::abs(r.weakest_translation_direction.x()), 0.99);
 }
 
+TEST(PointToPlaneIcp, TargetNormalsArePlaneNormalsAndLinesHaveNone) {
+  // A 4 x 4 m floor patch on a 10 cm grid (a target's resolution), and a line of points above it.
+  std::vector<Eigen::Vector3d> pts;
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j) pts.emplace_back(0.1 * i, 0.1 * j, 0.0);
+  const std::size_t floor_points = pts.size();
+  for (int i = 0; i < 40; ++i) pts.emplace_back(0.05 * i, 1.0, 3.0);
+  const IcpTarget target(pts);
+  for (std::size_t i : {std::size_t{205}, std::size_t{820}, std::size_t{1234}}) {  // inside the patch
+    ASSERT_TRUE(target.hasNormal(i)) << i;
+    EXPECT_NEAR(std::abs(target.normal(i).z()), 1.0, 1e-9) << i;
+  }
+  for (std::size_t i = floor_points; i < pts.size(); i += 13) EXPECT_FALSE(target.hasNormal(i)) << i;
+}
+
 TEST(PointToPlaneIcp, VoxelCentroidsKeepsOnePointPerVoxel) {
   const std::vector<Eigen::Vector3d> pts{{0.1, 0.1, 0.1}, {0.3, 0.3, 0.3}, {1.5, 0.2, 0.2}};
   const auto out = map::voxelCentroids(pts, 1.0);

@@ -93,6 +93,27 @@ TEST(LoopCloser, RejectsARepetitiveCorridorShiftedAlongItsAxis) {
   }
 }
 
+TEST(LoopCloser, RejectsAFeaturelessCorridorAtItsPriorAsTheFullCheckWould) {
+  // Plain walls along x: no alignment can fix the position along the corridor. The check at the
+  // prior says so without the ICP, and the full check (pre-check off) agrees.
+  const auto scene = testing::corridor(120.0, 4.0, /*doors=*/false);
+  const Eigen::Isometry3d T0 = pose(0.0, 0.0, 1.0, 0.0);
+  const Eigen::Isometry3d T1 = pose(0.5, 0.1, 1.0, 2 * kDeg);
+  PoseGraph graph;
+  graph.addKeyframe(keyframe(0.0, T0, testing::scan(scene, T0, 50, 0.01, 20.0)));
+  const int q = graph.addKeyframe(keyframe(40.0, T1 * pose(0.1, 0.05, 0, 0.5 * kDeg), testing::scan(scene, T1, 51, 0.01, 20.0)));
+  const LoopResult early = LoopCloser(LoopCloser::Config{}).detect(graph, q);
+  report("plain corridor", early);
+  EXPECT_FALSE(early.accepted);
+  EXPECT_NE(early.reason.find("degenerate geometry at the prior"), std::string::npos) << early.reason;
+  LoopCloser::Config full_check;
+  full_check.prior_eigenvalue_fraction = 0.0;
+  const LoopResult full = LoopCloser(full_check).detect(graph, q);
+  report("plain corridor, full check", full);
+  EXPECT_FALSE(full.accepted);
+  EXPECT_NE(full.reason.find("degenerate geometry (translation"), std::string::npos) << full.reason;
+}
+
 TEST(LoopCloser, FindsARevisitByItsDescriptorWhenDriftIsLarge) {
   // The estimate is 30 m off (no distance candidate); the Scan Context finds the place and its yaw.
   const auto scene = testing::roomA();

@@ -49,6 +49,10 @@ class LoopCloser {
     // Reject below: degenerate direction (see IcpResult). Corridor-like places (weak along one
     // axis) give loops that slide: on the simulated corridor 0.03 raised the ATE 5.2 -> 10.7 cm.
     double min_translation_eigenvalue = 0.08;
+    // Distance candidates whose geometry at the prior gives less than this fraction of
+    // min_translation_eigenvalue are rejected before the ICP (0: never). The alignment changes it
+    // by a few percent (README, Speed), so only clear cases are cut short.
+    double prior_eigenvalue_fraction = 0.67;
     double max_correction_m = 5.0;      // distance candidates: ICP may move the prior at most this ...
     double max_correction_deg = 30.0;   // ... and rotate it at most this
     std::vector<double> ambiguity_shifts_m{1.5, 3.0, 4.5};  // restarts at +-these along both principal axes
@@ -75,7 +79,7 @@ class LoopCloser {
  private:
   struct Verification;
   Verification verify(const PoseGraph& graph, int query, int match, const Eigen::Isometry3d& prior,
-                      bool bound_correction) const;
+                      bool by_distance) const;
   const ScanContext& descriptor(const PoseGraph& graph, int i) const;
 
   Config cfg_;

@@ -22,6 +22,8 @@ namespace mmlio::backend {
 
 /// A registration target: points, a k-d tree over them and a normal per point (PCA of its
 /// neighbours; invalid where the neighbourhood is not a plane: edges, corners, scan lines).
+/// Normals are fitted when first asked for, so a target serves one alignment at a time (not
+/// thread-safe).
 class IcpTarget {
  public:
   /// normal_neighbours: k of the PCA neighbourhood (>= 3). min_patch_width_m: a neighbourhood
