@@ -91,13 +91,15 @@ const Eigen::Vector3d& IcpTarget::normal(std::size_t i) const {
 }
 bool IcpTarget::hasNormal(std::size_t i) const { return impl_->hasNormal(i); }
 
-int IcpTarget::nearest(const Eigen::Vector3d& q, double* dist_sq) const {
+int IcpTarget::nearestWithin(const Eigen::Vector3d& q, double max_dist_sq) const {
   if (impl_->points.empty()) return -1;
   std::uint32_t idx = 0;
   double d2 = 0;
-  impl_->tree->knnSearch(q.data(), 1, &idx, &d2);
-  if (dist_sq) *dist_sq = d2;
-  return static_cast<int>(idx);
+  nanoflann::KNNResultSet<double, std::uint32_t> result(1);
+  result.init(&idx, &d2);
+  d2 = max_dist_sq;  // the search bound from the start: branches beyond the gate are not visited
+  impl_->tree->findNeighbors(result, q.data(), nanoflann::SearchParams());
+  return result.size() == 0 ? -1 : static_cast<int>(idx);
 }
 
 IcpResult alignPointToPlane(const std::vector<Eigen::Vector3d>& source, const IcpTarget& target,
@@ -132,9 +134,8 @@ IcpResult alignPointToPlane(const std::vector<Eigen::Vector3d>& source, const Ic
       abs_sum = 0;
       for (const auto& p : src) {
         const Eigen::Vector3d x = T * p;
-        double d2 = 0;
-        const int j = target.nearest(x, &d2);
-        if (d2 > gate_sq || !target.hasNormal(static_cast<std::size_t>(j))) continue;
+        const int j = target.nearestWithin(x, gate_sq);
+        if (j < 0 || !target.hasNormal(static_cast<std::size_t>(j))) continue;
         const Eigen::Vector3d& n = target.normal(static_cast<std::size_t>(j));
         const double r = n.dot(x - target.points()[static_cast<std::size_t>(j)]);
         Vector6d J;
@@ -167,9 +168,8 @@ IcpResult alignPointToPlane(const std::vector<Eigen::Vector3d>& source, const Ic
   int overlapping = 0;
   for (const auto& p : src) {
     const Eigen::Vector3d x = T * p;
-    double d2 = 0;
-    const int j = target.nearest(x, &d2);
-    if (d2 > gate_sq) continue;
+    const int j = target.nearestWithin(x, gate_sq);
+    if (j < 0) continue;
     ++overlapping;
     if (!target.hasNormal(static_cast<std::size_t>(j))) continue;
     const Eigen::Vector3d& n = target.normal(static_cast<std::size_t>(j));

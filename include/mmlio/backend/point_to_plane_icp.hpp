@@ -37,8 +37,8 @@ class IcpTarget {
   const std::vector<Eigen::Vector3d>& points() const;
   const Eigen::Vector3d& normal(std::size_t i) const;
   bool hasNormal(std::size_t i) const;
-  /// Nearest target point to q: its index and squared distance (index -1 if the target is empty).
-  int nearest(const Eigen::Vector3d& q, double* dist_sq) const;
+  /// Nearest target point to q closer than sqrt(max_dist_sq), or -1: the bound prunes the search.
+  int nearestWithin(const Eigen::Vector3d& q, double max_dist_sq) const;
 
  private:
   struct Impl;
