@@ -12,9 +12,10 @@ namespace mmlio::backend {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
-// Each of the twelve uniqueness restarts needs only to tell whether another alignment fits about
-// as well: a couple of thousand spread-out points decide that (a hall keyframe has ~9000 at 0.3 m,
-// and the restarts were most of a loop check's 2-3 s there).
+// Each of the twelve uniqueness restarts, and the refinement of one that ends elsewhere, needs only
+// to tell whether another alignment fits about as well: a couple of thousand spread-out points
+// decide that (a hall keyframe has ~9000 at 0.3 m, and the restarts were most of a loop check's
+// 2-3 s there; a corridor refinement rarely converges within its 20 iterations).
 constexpr std::size_t kMaxRestartSourcePoints = 2000;
 
 std::string fmt(double v) {
@@ -146,6 +147,7 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
         fine.levels = 1;
         fine.max_corr_coarse_m = icp_.max_corr_fine_m;
         fine.voxel_coarse_m = icp_.voxel_fine_m;
+        fine.max_source_points = kMaxRestartSourcePoints;
         const IcpResult alt = alignPointToPlane(source, target, coarse.T_target_source, fine);
         if (!alt.converged) continue;
         const double separation = (alt.T_target_source.translation() - r.T_target_source.translation()).norm();
