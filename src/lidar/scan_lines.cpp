@@ -12,7 +12,7 @@ constexpr double kRingGapDeg = 0.25;  // elevation gap separating two rings in t
 constexpr int kMaxImageRows = 256;    // more elevation clusters than this: no ring structure
 
 bool valid(const Point& p, double min_range_m) {
-  return p.xyz.allFinite() && p.xyz.cast<double>().norm() >= min_range_m;
+  return p.xyz.allFinite() && p.xyz.cast<double>().squaredNorm() >= min_range_m * min_range_m;
 }
 
 double azimuth(const Point& p) { return std::atan2(static_cast<double>(p.xyz.y()), static_cast<double>(p.xyz.x())); }
