@@ -8,6 +8,7 @@
 #include "mmlio/lidar/deskew.hpp"
 #include "mmlio/lidar/features.hpp"
 #include "mmlio/lidar/voxel_filter.hpp"
+#include "mmlio/map/range_image.hpp"
 #include "mmlio/map/voxel_hash_map.hpp"
 
 namespace {
@@ -69,6 +70,35 @@ void BM_DeskewVlp16Sweep(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_DeskewVlp16Sweep)->Unit(benchmark::kMillisecond);
+
+// The visibility test of moving-object handling: a VLP-16 sweep's range image, built and asked
+// about points of the room (on the walls, in front of them, behind them) and of a second sweep
+// taken 0.3 m away (what the moved-in test and the map cleaning ask).
+void BM_RangeImageBuild(benchmark::State& state) {
+  const LidarScan scan = synth::vlp16Room(synth::BoxRoom{}, 0.01);
+  const map::RangeImageConfig cfg;
+  for (auto _ : state) benchmark::DoNotOptimize(map::RangeImage(scan.points, cfg).memoryBytes());
+}
+BENCHMARK(BM_RangeImageBuild)->Unit(benchmark::kMillisecond);
+
+void BM_RangeImageClassify(benchmark::State& state) {
+  const LidarScan scan = synth::vlp16Room(synth::BoxRoom{}, 0.01);
+  const map::RangeImage image(scan.points, map::RangeImageConfig{});
+  std::vector<Eigen::Vector3d> queries;
+  for (const Point& p : synth::vlp16Room(synth::BoxRoom{}, 0.01, 7).points) {
+    const Eigen::Vector3d v = p.xyz.cast<double>() + Eigen::Vector3d(0.3, 0.0, 0.0);
+    for (double scale : {0.7, 1.0, 1.2}) queries.push_back(scale * v);
+  }
+  std::size_t q = 0;
+  int free = 0;
+  for (auto _ : state) {
+    free += image.classify(queries[q]) == map::Visibility::kFree;
+    q = q + 1 == queries.size() ? 0 : q + 1;
+  }
+  benchmark::DoNotOptimize(free);
+  state.counters["free_share"] = static_cast<double>(free) / static_cast<double>(state.iterations());
+}
+BENCHMARK(BM_RangeImageClassify);
 
 void BM_VoxelDownsample20cm(benchmark::State& state) {
   const LidarScan scan = synth::vlp16Room(synth::BoxRoom{}, 0.01);
