@@ -87,8 +87,8 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
     at_prior.levels = 1;
     at_prior.max_iterations_per_level = 0;  // only the final statistics, at the prior
     const IcpResult probe = alignPointToPlane(source, target, prior, at_prior);
-    const double floor = cfg_.prior_eigenvalue_fraction * cfg_.min_translation_eigenvalue;
-    if (probe.converged && probe.min_translation_eigenvalue < floor) {
+    const double clearly_degenerate = cfg_.prior_eigenvalue_fraction * cfg_.min_translation_eigenvalue;
+    if (probe.converged && probe.min_translation_eigenvalue < clearly_degenerate) {
       v.icp = probe;
       v.reason = "degenerate geometry at the prior (translation eigenvalue " + fmt(probe.min_translation_eigenvalue) + ")";
       return v;

@@ -7,7 +7,8 @@
 // descriptor's yaw at zero offset. Each is verified by point-to-plane ICP of the query cloud against
 // a submap of keyframes around the candidate, and accepted only if
 //   fitness <= max_fitness_m, overlap >= min_overlap, the geometry constrains every horizontal
-//   direction (smallest normalised Hessian eigenvalue), a distance candidate's correction from its
+//   direction (smallest normalised Hessian eigenvalue; a distance candidate clearly short of it
+//   already at its prior is rejected before the ICP), a distance candidate's correction from its
 //   prior stays within a bound, and the match is unique: ICP restarted from priors shifted along the
 //   scene's horizontal principal axes must not find a distinct, equally good alignment. The last test
 //   is what rejects a repetitive corridor, where every door period aligns as well as the true one.
