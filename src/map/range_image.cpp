@@ -69,6 +69,16 @@ RangeImage::RangeImage(const std::vector<Point>& points, const RangeImageConfig&
   }
   cols_ = circle_cols_ - widest;
   col0_ = widest == 0 ? 0 : (widest_end + 1) % circle_cols_;
+  const int margin_cols = cfg_.window_cols + 1;
+  if (2 * (cols_ + 2 * margin_cols) < circle_cols_) {
+    narrow_arc_ = true;
+    const double res_rad = M_PI / 180.0 / inv_res_;
+    const double from = (col0_ - margin_cols) * res_rad - M_PI, to = (col0_ + cols_ + margin_cols) * res_rad - M_PI;
+    arc_from_x_ = std::cos(from);
+    arc_from_y_ = std::sin(from);
+    arc_to_x_ = std::cos(to);
+    arc_to_y_ = std::sin(to);
+  }
   // Only rows with returns are stored: a spinning LiDAR's 16 rings fill 16 of the ~60 rows its
   // 30 deg span covers at 0.5 deg.
   slot_of_row_.assign(static_cast<std::size_t>(rows_), -1);
@@ -99,6 +109,8 @@ Visibility RangeImage::classify(const Eigen::Vector3d& p) const {
   if (ranges_.empty()) return Visibility::kUnknown;
   const double r = p.norm();
   if (!(r >= cfg_.min_range_m) || r > cfg_.max_range_m) return Visibility::kUnknown;
+  if (narrow_arc_ && (arc_from_x_ * p.y() - arc_from_y_ * p.x() < 0 || p.x() * arc_to_y_ - p.y() * arc_to_x_ < 0))
+    return Visibility::kUnknown;  // beyond the arc
   // Most points asked about lie outside a solid-state LiDAR's rows or arc: the window is placed
   // row first, then column by column (x once per column), and left as soon as it is empty.
   const int row = rowOf(elevationOf(p), inv_res_) - row0_;  // a row just outside still sees measured rows

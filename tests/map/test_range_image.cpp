@@ -117,4 +117,24 @@ TEST(RangeImage, ASolidStateViewKeepsOnlyItsArcAndJudgesAsTheFullCircleWould) {
   EXPECT_GT(free, 100);
 }
 
+TEST(RangeImage, ANarrowViewAnswersAsTheSameViewWithAReturnBehindWould) {
+  // One return straight behind makes the stored arc wider than a half turn, which turns off the
+  // narrow view's shortcut for points beyond its arc; no query near the wall can see that return,
+  // so every answer must be the same.
+  const std::vector<Point> narrow = wallAhead();
+  std::vector<Point> wide = narrow;
+  wide.push_back(at(50.0, 180.0, 0.0));
+  const RangeImage a(narrow, RangeImageConfig{}), b(wide, RangeImageConfig{});
+  int unknown = 0, judged = 0;
+  for (double az = -170; az <= 170; az += 0.1)
+    for (double e : {-10.2, -5.0, 0.0, 9.9})
+      for (double r : {3.0, 10.0, 12.0}) {
+        const Visibility v = a.classify(dir(r, az, e));
+        ASSERT_EQ(v, b.classify(dir(r, az, e))) << "azimuth " << az << " elevation " << e << " range " << r;
+        (v == Visibility::kUnknown ? unknown : judged) += 1;
+      }
+  EXPECT_GT(judged, 1000);   // the wall's arc and its edges
+  EXPECT_GT(unknown, 5000);  // the rest of the turn
+}
+
 }  // namespace mmlio::map

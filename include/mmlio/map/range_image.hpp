@@ -56,6 +56,11 @@ class RangeImage {
   int cols_ = 0, rows_ = 0, row0_ = 0;
   int col0_ = 0;  // the stored columns are col0_ .. col0_ + cols_ - 1 around the circle: the azimuth
                   // arc with returns (a solid-state LiDAR's 82 deg, not 360)
+  // An arc narrower than a half turn is also kept as its two bounding directions (x, y), widened
+  // by the window and a column: a point outside them cannot reach a stored pixel, which two cross
+  // products tell without the atan2s (most of the local map, seen from an 82 deg view).
+  bool narrow_arc_ = false;
+  double arc_from_x_ = 0, arc_from_y_ = 0, arc_to_x_ = 0, arc_to_y_ = 0;
   // Per row (relative to row0_): where its pixels are stored, -1 for a row without returns.
   std::vector<std::int16_t> slot_of_row_;
   // Stored rows x cols_, nearest return in cm (0 = none): half the memory of floats, far below the
