@@ -185,15 +185,12 @@ void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConf
     if (flat.size() > cap) {
       std::nth_element(flat.begin(), flat.begin() + static_cast<std::ptrdiff_t>(cap), flat.end());
       flat.resize(cap);
-      for (const auto& [curvature, i] : flat) picked_plane[i] = 1;
-      for (int i = begin; i < end; ++i) {
-        if (!picked_plane[i]) continue;
-        picked_plane[i] = 0;
-        if (straightness(P, i, K, cand[i].stride) < cfg.plane_max_flatness) planes->push_back(static_cast<std::size_t>(i));
-      }
-    } else {
-      for (const auto& [curvature, i] : flat)  // already in line order
-        if (straightness(P, i, K, cand[i].stride) < cfg.plane_max_flatness) planes->push_back(static_cast<std::size_t>(i));
+    }
+    for (const auto& [curvature, i] : flat) picked_plane[i] = 1;
+    for (int i = begin; i < end; ++i) {
+      if (!picked_plane[i]) continue;
+      picked_plane[i] = 0;
+      if (straightness(P, i, K, cand[i].stride) < cfg.plane_max_flatness) planes->push_back(static_cast<std::size_t>(i));
     }
   }
   std::sort(edges->begin(), edges->end());

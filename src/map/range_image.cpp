@@ -111,8 +111,9 @@ Visibility RangeImage::classify(const Eigen::Vector3d& p) const {
   if (!(r >= cfg_.min_range_m) || r > cfg_.max_range_m) return Visibility::kUnknown;
   if (narrow_arc_ && (arc_from_x_ * p.y() - arc_from_y_ * p.x() < 0 || p.x() * arc_to_y_ - p.y() * arc_to_x_ < 0))
     return Visibility::kUnknown;  // beyond the arc
-  // Most points asked about lie outside a solid-state LiDAR's rows or arc: the window is placed
-  // row first, then column by column (x once per column), and left as soon as it is empty.
+  // Most points asked about lie outside a solid-state LiDAR's arc (turned away above) or rows: the
+  // window is placed row first, then column by column (x once per column), and left as soon as it
+  // is empty.
   const int row = rowOf(elevationOf(p), inv_res_) - row0_;  // a row just outside still sees measured rows
   if (row + cfg_.window_rows < 0 || row - cfg_.window_rows >= rows_) return Visibility::kUnknown;
   const int col = colOf(p);
