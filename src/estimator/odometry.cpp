@@ -153,11 +153,15 @@ struct Odometry::Impl {
         views[i].T_body_sensor = setup.extrinsic.T_imu_sensor;
         views[i].image = map::RangeImage(deskewed[i].points, cfg.dynamic.image);
       }
-      clouds[i] = lidar::extractFeatures(deskewed[i], setup.extrinsic.kind, setup.num_rings, cfg.features);
+      // Where every return is a surface point, scan-line plane features would go unused.
+      const bool surface_points = usesSurfacePoints(setup.extrinsic.name);
+      lidar::FeatureConfig features = cfg.features;
+      features.planes = !surface_points;
+      clouds[i] = lidar::extractFeatures(deskewed[i], setup.extrinsic.kind, setup.num_rings, features);
       stats[i].sensor = setup.extrinsic.name;
       stats[i].points = deskewed[i].points.size();
       stats[i].edges = clouds[i].edges.size();
-      stats[i].planes = clouds[i].planes.size();
+      stats[i].planes = surface_points ? deskewed[i].points.size() : clouds[i].planes.size();
       if (setup.extrinsic.kind == LidarKind::kSolidState) {
         const lidar::BadFrameResult bad = lidar::checkSolidStateFrame(clouds[i], cfg.bad_frame);
         stats[i].bad_frame = bad.bad;

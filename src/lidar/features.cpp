@@ -175,6 +175,7 @@ void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConf
       ++picked;
       for (int k = std::max(0, i - span_of[i]); k <= std::min(n - 1, i + span_of[i]); ++k) suppressed[k] = 1;
     }
+    if (!cfg.planes) continue;
     // Planes: the flattest max_planes_per_sector; the neighbourhood must be a straight run.
     // Ranked by (curvature, index) in one contiguous array (comparing through indices into cand
     // was a fifth of the extraction), then taken in line order.

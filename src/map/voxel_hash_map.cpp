@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <utility>
 
 #include "mmlio/core/voxel_key.hpp"
@@ -56,8 +57,7 @@ void VoxelHashMap::rebuildIndex() {
 void VoxelHashMap::add(const std::vector<Eigen::Vector3d>& world_points) {
   for (const auto& p : world_points) {
     if (!p.allFinite()) continue;
-    const auto [v, added] = findOrAdd(keyOf(p));
-    if (added) voxels_.back().points.reserve(static_cast<std::size_t>(max_points_per_voxel_));
+    const std::uint32_t v = findOrAdd(keyOf(p)).first;
     auto& bucket = voxels_[v].points;
     if (static_cast<int>(bucket.size()) >= max_points_per_voxel_) continue;
     bucket.push_back(p);
@@ -107,6 +107,31 @@ std::size_t VoxelHashMap::removeIf(const Eigen::Vector3d& center, double radius_
   return total;
 }
 
+// The cells around a query lie in a few bricks (at most 8 for the 27 nearest cells): each brick
+// is looked up in the hash once per query, not once per cell.
+class VoxelHashMap::BrickCache {
+ public:
+  explicit BrickCache(const VoxelHashMap& map) : map_(map) {}
+  const Brick* find(std::uint64_t brick_key) {
+    for (int i = 0; i < size_; ++i)
+      if (keys_[i] == brick_key) return bricks_[i];
+    const std::uint32_t b = map_.brick_index_.find(brick_key);
+    const Brick* brick = b == kNone ? nullptr : &map_.bricks_[b];
+    const int slot = size_ < kSlots ? size_++ : (next_++ % kSlots);
+    keys_[slot] = brick_key;
+    bricks_[slot] = brick;
+    return brick;
+  }
+
+ private:
+  static constexpr int kSlots = 8;
+  const VoxelHashMap& map_;
+  std::array<std::uint64_t, kSlots> keys_{};
+  std::array<const Brick*, kSlots> bricks_{};
+  int size_ = 0;
+  int next_ = 0;
+};
+
 int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
                       std::vector<Eigen::Vector3d>* out) const {
   out->clear();
@@ -114,20 +139,25 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
   const double max_d2 = max_dist_m * max_dist_m;
   const Key c = keyOf(q);
   // The k best candidates (squared distance, point), nearest first. k is small (5 for a plane fit):
-  // shifting a sorted array costs less than keeping a heap.
-  // Reused per thread: a query allocates nothing (queries run millions of times per run).
-  thread_local std::vector<std::pair<double, const Eigen::Vector3d*>> best;
-  best.clear();
-  best.reserve(static_cast<std::size_t>(k));
-  const auto full = [&] { return static_cast<int>(best.size()) == k; };
+  // shifting a sorted array costs less than keeping a heap. The storage is reused per thread (a
+  // query allocates nothing: queries run millions of times per run); the count and the bound live
+  // in locals, so the per-point test is one comparison against a register.
+  thread_local std::vector<std::pair<double, const Eigen::Vector3d*>> storage;
+  if (storage.size() < static_cast<std::size_t>(k)) storage.resize(static_cast<std::size_t>(k));
+  std::pair<double, const Eigen::Vector3d*>* const best = storage.data();
+  int found = 0;
+  // A candidate must come nearer than `bound`: within max_dist_m until k are found (the next
+  // double above max_d2, so a point at exactly max_dist_m still counts), then nearer than the k-th.
+  double bound = std::nextafter(max_d2, std::numeric_limits<double>::infinity());
+  const auto full = [&] { return found == k; };
   const auto visit = [&](const std::vector<Eigen::Vector3d>& points) {
     for (const auto& p : points) {
       const double d2 = (p - q).squaredNorm();
-      if (full() ? d2 >= best.back().first : d2 > max_d2) continue;
-      if (!full()) best.emplace_back();
-      std::size_t i = best.size() - 1;
+      if (d2 >= bound) continue;
+      int i = found < k ? found++ : k - 1;
       for (; i > 0 && best[i - 1].first > d2; --i) best[i] = best[i - 1];
       best[i] = {d2, &p};
+      if (found == k) bound = best[k - 1].first;
     }
   };
   // After scanning Chebyshev rings 0..r, every unscanned point is at least r voxels away from q.
@@ -145,6 +175,7 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
       const double d = offset > 0 ? face - coord : coord - face;
       return d * d;
     };
+    BrickCache bricks(*this);
     for (int r = 0; r <= max_ring; ++r) {
       for (int dx = -r; dx <= r; ++dx) {
         const double gx = axisGap(q.x(), c.x, dx);
@@ -152,23 +183,25 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
           const double gxy = gx + axisGap(q.y(), c.y, dy);
           for (int dz = -r; dz <= r; ++dz) {
             if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r) continue;  // shell only
-            // A voxel that cannot hold a point nearer than the current k-th best (or within
-            // max_dist_m) is not looked up: the hash lookups are most of the cost of a query.
+            // A voxel that cannot hold a point nearer than the bound is not looked up.
             const double gap2 = gxy + axisGap(q.z(), c.z, dz);
-            if (gap2 > max_d2 || (full() && gap2 >= best.back().first)) continue;
-            const std::uint32_t v = find(Key{c.x + dx, c.y + dy, c.z + dz});
+            if (gap2 >= bound) continue;
+            const Key key{c.x + dx, c.y + dy, c.z + dz};
+            const Brick* brick = bricks.find(brickKey(key));
+            if (!brick) continue;
+            const std::uint32_t v = (*brick)[slotInBrick(key)];
             if (v != kNone) visit(voxels_[v].points);
           }
         }
       }
       if (r >= 1 && full()) {
         const double covered = r * voxel_m_;
-        if (best.back().first <= covered * covered) break;
+        if (bound <= covered * covered) break;
       }
     }
   }
-  out->reserve(best.size());
-  for (const auto& b : best) out->push_back(*b.second);
+  out->reserve(static_cast<std::size_t>(found));
+  for (int i = 0; i < found; ++i) out->push_back(*best[i].second);
   return static_cast<int>(out->size());
 }
 

@@ -77,6 +77,20 @@ TEST(Features, LivoxLikeLineScanGivesCornerEdgesAndWallPlanes) {
   EXPECT_LE(p.at_edge, p.elsewhere / 50);
 }
 
+TEST(Features, EdgesOnlyPicksTheSameEdgesAndNoPlanes) {
+  // A LiDAR whose every return is matched as a surface point needs only its edges.
+  const BoxRoom room;
+  const LidarScan scan = synth::livoxRoom(room, std::atan2(5.0, 6.0), 0.02);
+  const FeatureCloud both = extractFeatures(scan, LidarKind::kSolidState, 6, FeatureConfig{});
+  FeatureConfig edges_only;
+  edges_only.planes = false;
+  const FeatureCloud f = extractFeatures(scan, LidarKind::kSolidState, 6, edges_only);
+  EXPECT_TRUE(f.planes.empty());
+  ASSERT_GT(both.edges.size(), 20u);
+  ASSERT_EQ(f.edges.size(), both.edges.size());
+  for (std::size_t i = 0; i < f.edges.size(); ++i) EXPECT_EQ(f.edges[i].xyz, both.edges[i].xyz);
+}
+
 TEST(Features, DepthJumpMakesTheNearSideABreakPointEdge) {
   // One line: a wall at 5 m, then (nearer) a wall at 3 m; 0.2 deg steps.
   LidarScan scan;

@@ -73,7 +73,8 @@ struct LidarSetup {
 
 struct LidarFrameStats {
   std::string sensor;
-  std::size_t points = 0, edges = 0, planes = 0;
+  std::size_t points = 0, edges = 0;
+  std::size_t planes = 0;  // plane candidates: scan-line plane features, or every return (surface points)
   bool bad_frame = false;
   int counted_edges = 0;  // solid state: edges beyond the bad-frame range
   // This LiDAR's own map matches (registered sweeps only): weakest translation direction in

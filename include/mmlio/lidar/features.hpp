@@ -44,6 +44,7 @@ struct FeatureConfig {
   int sectors_per_line = 6;         // each line is split into this many sectors for even spreading
   int max_edges_per_sector = 20;    // LOAM-style cap on edges per sector
   int max_planes_per_sector = 100;  // cap on planes per sector (the flattest are kept)
+  bool planes = true;               // false: edges only (a LiDAR whose every return is a surface point)
 };
 
 struct FeatureCloud {

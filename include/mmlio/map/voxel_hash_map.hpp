@@ -59,12 +59,9 @@ class VoxelHashMap {
   using Brick = std::array<std::uint32_t, 1 << (3 * kBrickShift)>;  // voxel index per slot, or kNone
   static constexpr std::uint32_t kNone = FlatKeyIndex::kNone;
   static std::uint64_t brickKey(const Key& k);
+  class BrickCache;
   static int slotInBrick(const Key& k) {
     return (k.x & kBrickMask) | (k.y & kBrickMask) << kBrickShift | (k.z & kBrickMask) << (2 * kBrickShift);
-  }
-  std::uint32_t find(const Key& k) const {
-    const std::uint32_t b = brick_index_.find(brickKey(k));
-    return b == kNone ? kNone : bricks_[b][slotInBrick(k)];
   }
   /// The voxel at k: its index, and whether it was created.
   std::pair<std::uint32_t, bool> findOrAdd(const Key& k);
