@@ -40,6 +40,29 @@ TEST(VoxelHashMap, KnnEqualsBruteForceOnTheStoredPoints) {
   }
 }
 
+TEST(VoxelHashMap, KnnEqualsBruteForceWhenTheSearchSpansManyBricks) {
+  // Sparse points and a wide gate: a query scans rings of voxels across dozens of 4x4x4 bricks,
+  // more than a query keeps at hand, so bricks are looked up again after being let go.
+  // (1 m bricks; a 1.5 m gate reaches 6 rings: up to 125 bricks, and the map has enough voxels
+  // that the rings are scanned rather than the whole map.)
+  VoxelHashMap map(0.25, 1000);
+  const auto cloud = randomCloud(2000, 10.0, 3);
+  map.add(cloud);
+  const auto queries = randomCloud(100, 10.0, 4);
+  std::vector<Eigen::Vector3d> got;
+  for (const auto& q : queries) {
+    const int k = 5;
+    const double max_dist = 1.5;
+    const int n = map.knn(q, k, max_dist, &got);
+    std::vector<double> d;
+    for (const auto& p : cloud)
+      if ((p - q).norm() <= max_dist) d.push_back((p - q).norm());
+    std::sort(d.begin(), d.end());
+    ASSERT_EQ(n, std::min<int>(k, static_cast<int>(d.size())));
+    for (int i = 0; i < n; ++i) EXPECT_NEAR((got[i] - q).norm(), d[i], 1e-12) << "rank " << i;
+  }
+}
+
 TEST(VoxelHashMap, KnnFindsNeighboursBeyondTheFirstRingWhenTheyAreTheOnlyOnes) {
   VoxelHashMap map(0.2, 20);
   map.add({Eigen::Vector3d(1.0, 0, 0), Eigen::Vector3d(0, 1.5, 0), Eigen::Vector3d(0, 0, 3.0)});
