@@ -36,43 +36,87 @@ std::pair<std::uint32_t, bool> VoxelHashMap::findOrAdd(const Key& k) {
   std::uint32_t& slot = bricks_[b][slotInBrick(k)];
   if (slot != kNone) return {slot, false};
   slot = static_cast<std::uint32_t>(voxels_.size());
-  voxels_.push_back({k, {}});
+  voxels_.push_back({k});
   return {slot, true};
 }
 
 void VoxelHashMap::rebuildIndex() {
   std::vector<Voxel> kept;
   kept.reserve(voxels_.size());
-  for (Voxel& v : voxels_)
-    if (!v.points.empty()) kept.push_back(std::move(v));
+  for (const Voxel& v : voxels_)
+    if (v.count > 0) kept.push_back(v);
   voxels_.clear();
   bricks_.clear();
   brick_index_.clear();
-  for (Voxel& v : kept) {
+  for (const Voxel& v : kept) {
     findOrAdd(v.key);
-    voxels_.back().points = std::move(v.points);
+    voxels_.back() = v;
   }
 }
 
+void VoxelHashMap::compactBrickByBrick() {
+  // A little room in each span: the next keyframe adds a point or two to most voxels it sees.
+  constexpr std::uint32_t kSlack = 4;
+  const auto max_points = static_cast<std::uint32_t>(max_points_per_voxel_);
+  // The previous arena's buffer is reused: a fresh one of this size page-faults for milliseconds.
+  std::vector<Eigen::Vector3d> arena = std::move(spare_);
+  arena.clear();
+  // Room for the spans that move to the end before the next rewrite, without reallocating.
+  const std::size_t needed = num_points_ + kSlack * voxels_.size();
+  arena.reserve(needed + needed / 2);
+  std::vector<Voxel> ordered;
+  ordered.reserve(voxels_.size());
+  for (Brick& brick : bricks_) {
+    for (std::uint32_t& slot : brick) {
+      if (slot == kNone) continue;
+      Voxel v = voxels_[slot];
+      const Eigen::Vector3d* from = pointsOf(v);
+      v.begin = static_cast<std::uint32_t>(arena.size());
+      v.capacity = std::min(max_points, v.count + kSlack);
+      arena.insert(arena.end(), from, from + v.count);
+      arena.resize(arena.size() + (v.capacity - v.count));
+      slot = static_cast<std::uint32_t>(ordered.size());
+      ordered.push_back(v);
+    }
+  }
+  voxels_ = std::move(ordered);
+  spare_ = std::move(points_);
+  points_ = std::move(arena);
+}
+
 void VoxelHashMap::add(const std::vector<Eigen::Vector3d>& world_points) {
+  const auto max_points = static_cast<std::uint32_t>(max_points_per_voxel_);
   for (const auto& p : world_points) {
     if (!p.allFinite()) continue;
-    const std::uint32_t v = findOrAdd(keyOf(p)).first;
-    auto& bucket = voxels_[v].points;
-    if (static_cast<int>(bucket.size()) >= max_points_per_voxel_) continue;
-    bucket.push_back(p);
+    const std::uint32_t index = findOrAdd(keyOf(p)).first;
+    if (voxels_[index].count >= max_points) continue;
+    if (voxels_[index].count == voxels_[index].capacity) {
+      // Full span: the voxel moves to the arena's end with twice the room (its old span is
+      // reclaimed when the arena is rewritten below).
+      Voxel& v = voxels_[index];
+      const std::uint32_t capacity = std::min(max_points, std::max<std::uint32_t>(4, 2 * v.capacity));
+      const auto begin = static_cast<std::uint32_t>(points_.size());
+      points_.resize(points_.size() + capacity);
+      std::copy(points_.begin() + v.begin, points_.begin() + v.begin + v.count, points_.begin() + begin);
+      v.begin = begin;
+      v.capacity = capacity;
+    }
+    Voxel& v = voxels_[index];
+    points_[v.begin + v.count++] = p;
     ++num_points_;
   }
+  // Rewritten once a third of it holds no point (spans moved away, removed points, room to grow):
+  // the spans of voxels that grew sit at the end until then.
+  if (3 * (points_.size() - num_points_) > points_.size()) compactBrickByBrick();
 }
 
 void VoxelHashMap::removeFarFrom(const Eigen::Vector3d& center, double radius_m) {
   const double r2 = radius_m * radius_m;
   bool removed = false;
   for (Voxel& v : voxels_) {
-    if (!v.points.empty() && (v.points.front() - center).squaredNorm() <= r2) continue;
-    num_points_ -= v.points.size();
-    v.points.clear();
-    v.points.shrink_to_fit();
+    if (v.count > 0 && (*pointsOf(v) - center).squaredNorm() <= r2) continue;
+    num_points_ -= v.count;
+    v.count = 0;
     removed = true;
   }
   if (removed) rebuildIndex();
@@ -82,19 +126,21 @@ std::size_t VoxelHashMap::removeIf(const Eigen::Vector3d& center, double radius_
                                   const std::function<bool(const Eigen::Vector3d&)>& remove,
                                   std::vector<Eigen::Vector3d>* removed_points) {
   const double reach = radius_m + std::sqrt(3.0) * voxel_m_;
-  std::vector<std::vector<Eigen::Vector3d>*> near;
+  std::vector<Voxel*> near;
   for (Voxel& v : voxels_)
-    if (!v.points.empty() && (v.points.front() - center).squaredNorm() <= reach * reach) near.push_back(&v.points);
+    if (v.count > 0 && (*pointsOf(v) - center).squaredNorm() <= reach * reach) near.push_back(&v);
   std::vector<std::vector<Eigen::Vector3d>> removed(near.size());
   const double r2 = radius_m * radius_m;
   tbb::parallel_for(std::size_t(0), near.size(), [&](std::size_t i) {
-    auto& bucket = *near[i];
-    std::size_t kept = 0;
-    for (const Eigen::Vector3d& p : bucket) {
+    Voxel& v = *near[i];
+    Eigen::Vector3d* points = pointsOf(v);
+    std::uint32_t kept = 0;
+    for (std::uint32_t j = 0; j < v.count; ++j) {
+      const Eigen::Vector3d& p = points[j];
       if ((p - center).squaredNorm() <= r2 && remove(p)) removed[i].push_back(p);
-      else bucket[kept++] = p;
+      else points[kept++] = p;
     }
-    bucket.resize(kept);
+    v.count = kept;
   });
   std::size_t total = 0;
   for (const auto& r : removed) {
@@ -150,8 +196,10 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
   // double above max_d2, so a point at exactly max_dist_m still counts), then nearer than the k-th.
   double bound = std::nextafter(max_d2, std::numeric_limits<double>::infinity());
   const auto full = [&] { return found == k; };
-  const auto visit = [&](const std::vector<Eigen::Vector3d>& points) {
-    for (const auto& p : points) {
+  const auto visit = [&](const Voxel& v) {
+    const Eigen::Vector3d* points = pointsOf(v);
+    for (std::uint32_t j = 0; j < v.count; ++j) {
+      const Eigen::Vector3d& p = points[j];
       const double d2 = (p - q).squaredNorm();
       if (d2 >= bound) continue;
       int i = found < k ? found++ : k - 1;
@@ -165,7 +213,7 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
   const double cube = std::pow(2.0 * rings + 1.0, 3);
   if (cube > 4.0 * static_cast<double>(voxels_.size())) {
     // The search cube holds more cells than the map has voxels: scanning the map is cheaper.
-    for (const Voxel& v : voxels_) visit(v.points);
+    for (const Voxel& v : voxels_) visit(v);
   } else {
     const int max_ring = std::max(1, static_cast<int>(rings));
     // Squared distance from q to the voxel `offset` cells from q's own along one axis.
@@ -190,7 +238,7 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
             const Brick* brick = bricks.find(brickKey(key));
             if (!brick) continue;
             const std::uint32_t v = (*brick)[slotInBrick(key)];
-            if (v != kNone) visit(voxels_[v].points);
+            if (v != kNone) visit(voxels_[v]);
           }
         }
       }
@@ -207,6 +255,7 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
 
 void VoxelHashMap::clear() {
   voxels_.clear();
+  points_.clear();
   bricks_.clear();
   brick_index_.clear();
   num_points_ = 0;
@@ -215,7 +264,7 @@ void VoxelHashMap::clear() {
 std::vector<Eigen::Vector3d> VoxelHashMap::points() const {
   std::vector<Eigen::Vector3d> all;
   all.reserve(num_points_);
-  for (const Voxel& v : voxels_) all.insert(all.end(), v.points.begin(), v.points.end());
+  for (const Voxel& v : voxels_) all.insert(all.end(), pointsOf(v), pointsOf(v) + v.count);
   return all;
 }
 

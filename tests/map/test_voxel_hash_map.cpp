@@ -1,6 +1,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <map>
+#include <tuple>
 #include <random>
 
 #include "mmlio/map/voxel_hash_map.hpp"
@@ -60,6 +63,59 @@ TEST(VoxelHashMap, KnnEqualsBruteForceWhenTheSearchSpansManyBricks) {
     std::sort(d.begin(), d.end());
     ASSERT_EQ(n, std::min<int>(k, static_cast<int>(d.size())));
     for (int i = 0; i < n; ++i) EXPECT_NEAR((got[i] - q).norm(), d[i], 1e-12) << "rank " << i;
+  }
+}
+
+TEST(VoxelHashMap, HoldsExactlyTheAddedPointsAcrossManyAddsAndRemovals) {
+  // Keyframe after keyframe: voxels fill up and their spans move, removals leave holes, and the
+  // arena is rewritten now and then. The map must hold exactly the points a plain list would
+  // (each voxel's first max_points in arrival order, minus those removed), and kNN must agree.
+  const double voxel = 0.5;
+  const int cap = 12;
+  VoxelHashMap map(voxel, cap);
+  std::vector<std::vector<Eigen::Vector3d>> expected_by_voxel;  // arrival order per voxel
+  std::map<std::tuple<int, int, int>, std::size_t> voxel_of;
+  const auto cell = [&](const Eigen::Vector3d& p) {
+    return std::make_tuple(static_cast<int>(std::floor(p.x() / voxel)), static_cast<int>(std::floor(p.y() / voxel)),
+                           static_cast<int>(std::floor(p.z() / voxel)));
+  };
+  for (unsigned batch = 0; batch < 40; ++batch) {
+    const auto pts = randomCloud(400, 3.0, 100 + batch);
+    map.add(pts);
+    for (const auto& p : pts) {
+      const auto [it, added] = voxel_of.emplace(cell(p), expected_by_voxel.size());
+      if (added) expected_by_voxel.emplace_back();
+      auto& list = expected_by_voxel[it->second];
+      if (static_cast<int>(list.size()) < cap) list.push_back(p);
+    }
+    if (batch % 7 == 3) {
+      const Eigen::Vector3d c(0.5 * (batch % 3), 0.0, -0.5);
+      const auto drop = [](const Eigen::Vector3d& p) { return p.x() + p.y() > 0.0; };
+      map.removeIf(c, 1.5, drop);
+      for (auto& list : expected_by_voxel)
+        list.erase(std::remove_if(list.begin(), list.end(),
+                                  [&](const Eigen::Vector3d& p) { return (p - c).norm() <= 1.5 && drop(p); }),
+                   list.end());
+    }
+  }
+  std::vector<Eigen::Vector3d> expected;
+  for (const auto& list : expected_by_voxel) expected.insert(expected.end(), list.begin(), list.end());
+  ASSERT_EQ(map.size(), expected.size());
+  const auto key = [](const Eigen::Vector3d& p) { return std::make_tuple(p.x(), p.y(), p.z()); };
+  auto got = map.points();
+  ASSERT_EQ(got.size(), expected.size());
+  std::sort(got.begin(), got.end(), [&](const auto& a, const auto& b) { return key(a) < key(b); });
+  std::sort(expected.begin(), expected.end(), [&](const auto& a, const auto& b) { return key(a) < key(b); });
+  for (std::size_t i = 0; i < got.size(); ++i) ASSERT_EQ(got[i], expected[i]);
+  std::vector<Eigen::Vector3d> nn;
+  for (const auto& q : randomCloud(100, 3.5, 7)) {
+    const int n = map.knn(q, 5, 1.0, &nn);
+    std::vector<double> d;
+    for (const auto& p : expected)
+      if ((p - q).norm() <= 1.0) d.push_back((p - q).norm());
+    std::sort(d.begin(), d.end());
+    ASSERT_EQ(n, std::min<int>(5, static_cast<int>(d.size())));
+    for (int i = 0; i < n; ++i) EXPECT_NEAR((nn[i] - q).norm(), d[i], 1e-12);
   }
 }
 

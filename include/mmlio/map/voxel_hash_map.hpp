@@ -49,10 +49,14 @@ class VoxelHashMap {
   // A kNN query looks up 27 to 125 neighbouring voxels, most of them empty where features are far
   // and sparse. Voxels are indexed in bricks of 4x4x4: one hash lookup finds a brick, whose 64
   // slots are an array, so a query's neighbourhood costs a few hash lookups (each a likely cache
-  // miss) instead of one per voxel. Voxels live in `voxels_` in insertion order.
+  // miss) instead of one per voxel.
+  // A hall's plane map holds ~600k points (15 MB): most of a query's time was waiting for memory.
+  // All points live in one arena, each voxel's in a span of it; the arena is rewritten brick by
+  // brick now and then, so the voxels a query visits (and the next query's, a few decimetres on)
+  // lie together in memory instead of in one heap block each.
   struct Voxel {
     Key key;
-    std::vector<Eigen::Vector3d> points;
+    std::uint32_t begin = 0, count = 0, capacity = 0;  // span of points_
   };
   static constexpr int kBrickShift = 2;  // bricks of 4 voxels a side
   static constexpr int kBrickMask = (1 << kBrickShift) - 1;
@@ -65,13 +69,18 @@ class VoxelHashMap {
   }
   /// The voxel at k: its index, and whether it was created.
   std::pair<std::uint32_t, bool> findOrAdd(const Key& k);
-  void rebuildIndex();  // after voxels were removed (compacts them)
+  void rebuildIndex();  // after voxels were emptied: drops them from the index
+  void compactBrickByBrick();  // rewrites the arena in brick order, dropping unowned slots
+  const Eigen::Vector3d* pointsOf(const Voxel& v) const { return points_.data() + v.begin; }
+  Eigen::Vector3d* pointsOf(const Voxel& v) { return points_.data() + v.begin; }
 
   double voxel_m_;
   double inv_voxel_;
   int max_points_per_voxel_;
   std::size_t num_points_ = 0;
   std::vector<Voxel> voxels_;
+  std::vector<Eigen::Vector3d> points_;  // arena of the voxels' spans
+  std::vector<Eigen::Vector3d> spare_;   // the previous arena's buffer, for the next rewrite
   std::vector<Brick> bricks_;
   FlatKeyIndex brick_index_;  // packed brick key -> index into bricks_
 };
