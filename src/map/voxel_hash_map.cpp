@@ -59,11 +59,12 @@ void VoxelHashMap::compactBrickByBrick() {
   constexpr std::uint32_t kSlack = 4;
   const auto max_points = static_cast<std::uint32_t>(max_points_per_voxel_);
   // The previous arena's buffer is reused: a fresh one of this size page-faults for milliseconds.
-  std::vector<Eigen::Vector3d> arena = std::move(spare_);
+  Arena arena = std::move(spare_);
   arena.clear();
-  // Room for the spans that move to the end before the next rewrite, without reallocating.
+  // Room for the spans that move to the end before the next rewrite, without reallocating; a
+  // growing map gets twice that, so that fresh memory (page faults) is taken now and then.
   const std::size_t needed = num_points_ + kSlack * voxels_.size();
-  arena.reserve(needed + needed / 2);
+  if (arena.capacity() < needed + needed / 2) arena.reserve(2 * needed);
   std::vector<Voxel> ordered;
   ordered.reserve(voxels_.size());
   for (Brick& brick : bricks_) {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "mmlio/core/flat_key_index.hpp"
+#include "mmlio/core/huge_page_allocator.hpp"
 
 namespace mmlio::map {
 
@@ -79,8 +80,9 @@ class VoxelHashMap {
   int max_points_per_voxel_;
   std::size_t num_points_ = 0;
   std::vector<Voxel> voxels_;
-  std::vector<Eigen::Vector3d> points_;  // arena of the voxels' spans
-  std::vector<Eigen::Vector3d> spare_;   // the previous arena's buffer, for the next rewrite
+  using Arena = std::vector<Eigen::Vector3d, HugePageAllocator<Eigen::Vector3d>>;
+  Arena points_;  // the voxels' spans
+  Arena spare_;   // the previous arena's buffer, for the next rewrite
   std::vector<Brick> bricks_;
   FlatKeyIndex brick_index_;  // packed brick key -> index into bricks_
 };
