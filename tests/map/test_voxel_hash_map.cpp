@@ -20,6 +20,19 @@ std::vector<Eigen::Vector3d> randomCloud(int n, double half_extent_m, unsigned s
   return pts;
 }
 
+// The map's k nearest within max_dist of q are, distance by distance, the brute-force ones of `stored`.
+void expectKnnIsBruteForce(const VoxelHashMap& map, const std::vector<Eigen::Vector3d>& stored,
+                           const Eigen::Vector3d& q, int k, double max_dist) {
+  std::vector<Eigen::Vector3d> got;
+  const int n = map.knn(q, k, max_dist, &got);
+  std::vector<double> d;
+  for (const auto& p : stored)
+    if ((p - q).norm() <= max_dist) d.push_back((p - q).norm());
+  std::sort(d.begin(), d.end());
+  ASSERT_EQ(n, std::min<int>(k, static_cast<int>(d.size())));
+  for (int i = 0; i < n; ++i) EXPECT_NEAR((got[i] - q).norm(), d[i], 1e-12) << "rank " << i;
+}
+
 }  // namespace
 
 TEST(VoxelHashMap, KnnEqualsBruteForceOnTheStoredPoints) {
@@ -27,20 +40,8 @@ TEST(VoxelHashMap, KnnEqualsBruteForceOnTheStoredPoints) {
   const auto cloud = randomCloud(20000, 10.0, 1);
   map.add(cloud);
   ASSERT_EQ(map.size(), cloud.size());
-  const auto queries = randomCloud(200, 11.0, 2);
-  std::vector<Eigen::Vector3d> got;
-  for (const auto& q : queries) {
-    for (double max_dist : {0.4, 1.0, 2.5}) {
-      const int k = 5;
-      const int n = map.knn(q, k, max_dist, &got);
-      std::vector<double> d;
-      for (const auto& p : cloud)
-        if ((p - q).norm() <= max_dist) d.push_back((p - q).norm());
-      std::sort(d.begin(), d.end());
-      ASSERT_EQ(n, std::min<int>(k, static_cast<int>(d.size())));
-      for (int i = 0; i < n; ++i) EXPECT_NEAR((got[i] - q).norm(), d[i], 1e-12) << "rank " << i;
-    }
-  }
+  for (const auto& q : randomCloud(200, 11.0, 2))
+    for (double max_dist : {0.4, 1.0, 2.5}) expectKnnIsBruteForce(map, cloud, q, 5, max_dist);
 }
 
 TEST(VoxelHashMap, KnnEqualsBruteForceWhenTheSearchSpansManyBricks) {
@@ -51,19 +52,7 @@ TEST(VoxelHashMap, KnnEqualsBruteForceWhenTheSearchSpansManyBricks) {
   VoxelHashMap map(0.25, 1000);
   const auto cloud = randomCloud(2000, 10.0, 3);
   map.add(cloud);
-  const auto queries = randomCloud(100, 10.0, 4);
-  std::vector<Eigen::Vector3d> got;
-  for (const auto& q : queries) {
-    const int k = 5;
-    const double max_dist = 1.5;
-    const int n = map.knn(q, k, max_dist, &got);
-    std::vector<double> d;
-    for (const auto& p : cloud)
-      if ((p - q).norm() <= max_dist) d.push_back((p - q).norm());
-    std::sort(d.begin(), d.end());
-    ASSERT_EQ(n, std::min<int>(k, static_cast<int>(d.size())));
-    for (int i = 0; i < n; ++i) EXPECT_NEAR((got[i] - q).norm(), d[i], 1e-12) << "rank " << i;
-  }
+  for (const auto& q : randomCloud(100, 10.0, 4)) expectKnnIsBruteForce(map, cloud, q, 5, 1.5);
 }
 
 TEST(VoxelHashMap, HoldsExactlyTheAddedPointsAcrossManyAddsAndRemovals) {
@@ -107,16 +96,7 @@ TEST(VoxelHashMap, HoldsExactlyTheAddedPointsAcrossManyAddsAndRemovals) {
   std::sort(got.begin(), got.end(), [&](const auto& a, const auto& b) { return key(a) < key(b); });
   std::sort(expected.begin(), expected.end(), [&](const auto& a, const auto& b) { return key(a) < key(b); });
   for (std::size_t i = 0; i < got.size(); ++i) ASSERT_EQ(got[i], expected[i]);
-  std::vector<Eigen::Vector3d> nn;
-  for (const auto& q : randomCloud(100, 3.5, 7)) {
-    const int n = map.knn(q, 5, 1.0, &nn);
-    std::vector<double> d;
-    for (const auto& p : expected)
-      if ((p - q).norm() <= 1.0) d.push_back((p - q).norm());
-    std::sort(d.begin(), d.end());
-    ASSERT_EQ(n, std::min<int>(5, static_cast<int>(d.size())));
-    for (int i = 0; i < n; ++i) EXPECT_NEAR((nn[i] - q).norm(), d[i], 1e-12);
-  }
+  for (const auto& q : randomCloud(100, 3.5, 7)) expectKnnIsBruteForce(map, expected, q, 5, 1.0);
 }
 
 TEST(VoxelHashMap, KnnFindsNeighboursBeyondTheFirstRingWhenTheyAreTheOnlyOnes) {
