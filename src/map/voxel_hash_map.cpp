@@ -89,12 +89,11 @@ void VoxelHashMap::add(const std::vector<Eigen::Vector3d>& world_points) {
   const auto max_points = static_cast<std::uint32_t>(max_points_per_voxel_);
   for (const auto& p : world_points) {
     if (!p.allFinite()) continue;
-    const std::uint32_t index = findOrAdd(keyOf(p)).first;
-    if (voxels_[index].count >= max_points) continue;
-    if (voxels_[index].count == voxels_[index].capacity) {
+    Voxel& v = voxels_[findOrAdd(keyOf(p)).first];
+    if (v.count >= max_points) continue;
+    if (v.count == v.capacity) {
       // Full span: the voxel moves to the arena's end with twice the room (its old span is
       // reclaimed when the arena is rewritten below).
-      Voxel& v = voxels_[index];
       const std::uint32_t capacity = std::min(max_points, std::max<std::uint32_t>(4, 2 * v.capacity));
       const auto begin = static_cast<std::uint32_t>(points_.size());
       points_.resize(points_.size() + capacity);
@@ -102,7 +101,6 @@ void VoxelHashMap::add(const std::vector<Eigen::Vector3d>& world_points) {
       v.begin = begin;
       v.capacity = capacity;
     }
-    Voxel& v = voxels_[index];
     points_[v.begin + v.count++] = p;
     ++num_points_;
   }
