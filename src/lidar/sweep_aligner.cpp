@@ -108,19 +108,23 @@ AlignedSweep SweepAligner::cut(const Window& w) {
   std::sort(order.begin(), order.end());
   for (const auto& [rank, name] : order) {
     SensorQueue& q = sensors_[*name];
-    while (!q.points.empty() && q.points.front().t_ns < w.start_ns) {
-      q.points.pop_front();
-      ++dropped_points_;
-    }
+    const auto before = std::partition_point(q.points.begin(), q.points.end(),
+                                             [&](const TimedPoint& t) { return t.t_ns < w.start_ns; });
+    dropped_points_ += static_cast<std::size_t>(before - q.points.begin());
+    q.points.erase(q.points.begin(), before);
     LidarScan scan;
     scan.sensor = *name;
     scan.start_ns = w.start_ns;
-    while (!q.points.empty() && q.points.front().t_ns < w.end_ns) {
-      Point p = q.points.front().p;
-      p.time_s = static_cast<float>(toSec(q.points.front().t_ns - w.start_ns));
+    // The queue is in time order: the window's points are its front, up to the first at its end.
+    const auto end = std::partition_point(q.points.begin(), q.points.end(),
+                                          [&](const TimedPoint& t) { return t.t_ns < w.end_ns; });
+    scan.points.reserve(static_cast<std::size_t>(end - q.points.begin()));
+    for (auto it = q.points.begin(); it != end; ++it) {
+      Point p = it->p;
+      p.time_s = static_cast<float>(toSec(it->t_ns - w.start_ns));
       scan.points.push_back(p);
-      q.points.pop_front();
     }
+    q.points.erase(q.points.begin(), end);
     if (!scan.points.empty()) out.scans.push_back(std::move(scan));
   }
   return out;

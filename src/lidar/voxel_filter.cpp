@@ -24,9 +24,11 @@ struct Accumulator {
 std::vector<Point> voxelDownsample(const std::vector<Point>& pts, double leaf_m) {
   if (leaf_m <= 0.0) return pts;
   const double inv_leaf = 1.0 / leaf_m;
-  FlatKeyIndex slot_of_key;
+  thread_local FlatKeyIndex slot_of_key;  // every sweep's filter needs about the same size
+  slot_of_key.reset();
   std::vector<Point> out;
-  std::vector<Accumulator> acc;
+  thread_local std::vector<Accumulator> acc;
+  acc.clear();
   for (const Point& p : pts) {
     if (!p.xyz.allFinite()) continue;
     const auto [slot, inserted] =

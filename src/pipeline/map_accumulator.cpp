@@ -34,6 +34,12 @@ void MapAccumulator::add(const std::vector<Point>& points_body, const Eigen::Iso
   }
 }
 
+void MapAccumulator::clear() {
+  cells_.clear();
+  index_.reset();
+  raw_.clear();
+}
+
 std::size_t MapAccumulator::size() const { return leaf_m_ <= 0.0 ? raw_.size() : cells_.size(); }
 
 std::vector<Point> MapAccumulator::points() const {

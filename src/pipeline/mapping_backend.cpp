@@ -130,9 +130,16 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
     strided_.clear();
     for (std::size_t i = begin + phase; i < end; i += stride) strided_.push_back(sweep.points_body[i]);
     const std::string key = split ? sweep.lidars[l].sensor : std::string();
-    open_.try_emplace(key, cfg_.map_leaf_m).first->second.add(strided_, T_keyframe_body);
+    openAccumulator(key).add(strided_, T_keyframe_body);
     begin = end;
   }
+}
+
+MapAccumulator& MappingBackend::openAccumulator(const std::string& key) {
+  auto it = open_.find(key);
+  if (it != open_.end()) return it->second;
+  if (auto reused = emptied_.extract(key)) return open_.insert(std::move(reused)).position->second;
+  return open_.try_emplace(key, cfg_.map_leaf_m).first->second;
 }
 
 Trajectory MappingBackend::correctedTrajectory() const {
@@ -174,6 +181,10 @@ void MappingBackend::closeSubmap() {
     pts.shrink_to_fit();
     submaps_.back()[lidar] = std::move(pts);
   }
+  // Each keyframe's accumulators are filled with about as many points as the last ones: their
+  // storage is reused rather than grown and page-faulted anew.
+  for (auto& [lidar, acc] : open_) acc.clear();
+  emptied_.merge(open_);
   open_.clear();
   // A keyframe that added almost nothing new to the map revisits a place older keyframes cover:
   // its loop cloud would only duplicate theirs as a candidate, so it is freed (the last keyframe,

@@ -36,6 +36,29 @@ TEST(FlatKeyIndex, AnswersAsAnUnorderedMapThroughGrowth) {
   EXPECT_EQ(index.find(reference.begin()->first), FlatKeyIndex::kNone);
 }
 
+// reset() keeps (or, after a small fill, gives back) the slots; either way the next fill must
+// answer as a fresh index does, with none of the earlier keys left behind.
+TEST(FlatKeyIndex, ResetEmptiesItForARefillOfAnySize) {
+  FlatKeyIndex index;
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> axis(-300, 300);
+  for (const int keys : {20000, 20000, 50, 3000}) {
+    index.reset();
+    EXPECT_TRUE(index.empty());
+    std::unordered_map<std::uint64_t, std::uint32_t> reference;
+    for (int i = 0; i < keys; ++i) {
+      const std::uint64_t key = packVoxelKey(axis(rng), axis(rng), axis(rng));
+      const auto [got, added] = index.insert(key, static_cast<std::uint32_t>(reference.size()));
+      const auto [it, ref_added] = reference.emplace(key, got);
+      ASSERT_EQ(added, ref_added);
+      ASSERT_EQ(got, it->second);
+    }
+    EXPECT_EQ(index.size(), reference.size());
+    for (const auto& [key, value] : reference) ASSERT_EQ(index.find(key), value);
+    for (int i = 0; i < 200; ++i) ASSERT_EQ(index.find(packVoxelKey(axis(rng) + 1000, 0, 0)), FlatKeyIndex::kNone);
+  }
+}
+
 TEST(FlatKeyIndex, SetInsertsOnceAndFindsItsKeys) {
   FlatKeySet set;
   EXPECT_TRUE(set.insert(packVoxelKey(0, 0, 0)));  // key 0 of the origin's neighbourhood is a valid key

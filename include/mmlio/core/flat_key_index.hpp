@@ -3,6 +3,7 @@
 // the caller's dense storage, or a set of keys. Linear probing at load <= 1/2 in one flat array:
 // voxel grids look up millions of mostly neighbouring keys per run, and std::unordered_map's
 // node per entry (allocation, pointer chasing) was most of that cost.
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <utility>
@@ -41,6 +42,19 @@ class FlatKeyIndex {
   bool empty() const { return size_ == 0; }
   void clear() {
     slots_.assign(kInitialSlots, Slot{});
+    size_ = 0;
+  }
+  /// Empties it but keeps its slots: an index refilled with about as many keys again (a voxel
+  /// filter per sweep, a submap per keyframe) neither grows step by step nor page-faults anew.
+  /// Slots that the last fill left mostly unused (under 1/16) are given back.
+  void reset() {
+    if (16 * size_ < slots_.size() && slots_.size() > kInitialSlots) {
+      std::size_t n = kInitialSlots;
+      while (n < 4 * size_) n *= 2;
+      slots_.assign(n, Slot{});
+    } else {
+      std::fill(slots_.begin(), slots_.end(), Slot{});
+    }
     size_ = 0;
   }
 

@@ -55,7 +55,7 @@ class SweepAligner {
     Point p;
   };
   struct SensorQueue {
-    std::deque<TimedPoint> points;                 // sorted by t_ns
+    std::vector<TimedPoint> points;                // sorted by t_ns; a window's are its front
     std::deque<std::pair<Stamp, Stamp>> frames;    // [start, end) of its own frames not yet windowed
     Stamp latest_ns = 0;                           // newest point time received
     std::size_t order = 0;                         // first-seen rank

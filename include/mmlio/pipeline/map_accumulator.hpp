@@ -16,6 +16,8 @@ class MapAccumulator {
   /// Adds body-frame points seen from pose T_world_body.
   void add(const std::vector<Point>& points_body, const Eigen::Isometry3d& T_world_body);
   std::size_t size() const;
+  /// Empties it, keeping its storage for the next fill of about the same size.
+  void clear();
   /// One point per voxel (centroid, mean intensity), in the order the voxels were first hit.
   std::vector<Point> points() const;
 

@@ -71,8 +71,10 @@ class MappingBackend {
   using Submap = std::map<std::string, std::vector<Point>>;
   std::vector<Submap> submaps_;
   std::map<std::string, MapAccumulator> open_;
+  std::map<std::string, MapAccumulator> emptied_;  // closed accumulators, kept for their storage
   std::map<std::string, FlatKeySet> covered_;  // world voxels held, per LiDAR key
   void closeSubmap();
+  MapAccumulator& openAccumulator(const std::string& key);  // the newest keyframe's, for this LiDAR key
   std::vector<Point> mergedMap(const std::string* only_lidar) const;
   void judgeSubmaps(bool all);
   void removeGhosts(std::size_t submap);
