@@ -1,8 +1,8 @@
 #include "mmlio/map/kd_tree.hpp"
 
 #include <cmath>
-#include <unordered_map>
 
+#include "mmlio/core/flat_key_index.hpp"
 #include "mmlio/core/voxel_key.hpp"
 
 namespace mmlio::map {
@@ -11,18 +11,20 @@ std::vector<Eigen::Vector3d> voxelCentroids(const std::vector<Eigen::Vector3d>& 
   if (leaf_m <= 0) return pts;
   const double inv = 1.0 / leaf_m;
   const auto idx = [inv](double v) { return static_cast<std::int64_t>(std::floor(v * inv)); };
-  std::unordered_map<std::uint64_t, std::size_t> index;
-  index.reserve(pts.size());
+  thread_local FlatKeyIndex index;  // loop checks voxelize clouds of about the same size again and again
+  index.reset();
   std::vector<Eigen::Vector3d> sum;
-  std::vector<int> count;
+  thread_local std::vector<int> count;
+  count.clear();
   for (const auto& p : pts) {
-    auto [it, inserted] = index.emplace(packVoxelKey(idx(p.x()), idx(p.y()), idx(p.z())), sum.size());
+    const auto [slot, inserted] =
+        index.insert(packVoxelKey(idx(p.x()), idx(p.y()), idx(p.z())), static_cast<std::uint32_t>(sum.size()));
     if (inserted) {
       sum.push_back(p);
       count.push_back(1);
     } else {
-      sum[it->second] += p;
-      ++count[it->second];
+      sum[slot] += p;
+      ++count[slot];
     }
   }
   for (std::size_t i = 0; i < sum.size(); ++i) sum[i] /= count[i];
