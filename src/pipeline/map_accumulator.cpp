@@ -1,5 +1,6 @@
 #include "mmlio/pipeline/map_accumulator.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "mmlio/core/voxel_key.hpp"
@@ -17,20 +18,34 @@ std::uint64_t voxelKey(const Eigen::Vector3d& p, double leaf) {
 MapAccumulator::MapAccumulator(double leaf_m) : leaf_m_(leaf_m) {}
 
 void MapAccumulator::add(const std::vector<Point>& points_body, const Eigen::Isometry3d& T_world_body) {
-  for (const Point& p : points_body) {
-    const Eigen::Vector3d w = T_world_body * p.xyz.cast<double>();
-    if (leaf_m_ <= 0.0) {
+  if (leaf_m_ <= 0.0) {
+    for (const Point& p : points_body) {
       Point q = p;
-      q.xyz = w.cast<float>();
+      q.xyz = (T_world_body * p.xyz.cast<double>()).cast<float>();
       raw_.push_back(q);
-      continue;
     }
-    const auto [index, added] = index_.insert(voxelKey(w, leaf_m_), static_cast<std::uint32_t>(cells_.size()));
-    if (added) cells_.emplace_back();
-    Cell& c = cells_[index];
-    c.sum += w;
-    c.intensity += p.intensity;
-    ++c.count;
+    return;
+  }
+  // Keys are computed (and their slots prefetched) a block ahead of the inserts: the index of a
+  // keyframe's submap outgrows the cache, and consecutive returns land in unrelated slots.
+  constexpr std::size_t kBlock = 16;
+  Eigen::Vector3d world[kBlock];
+  std::uint64_t keys[kBlock];
+  for (std::size_t begin = 0; begin < points_body.size(); begin += kBlock) {
+    const std::size_t n = std::min(kBlock, points_body.size() - begin);
+    for (std::size_t j = 0; j < n; ++j) {
+      world[j] = T_world_body * points_body[begin + j].xyz.cast<double>();
+      keys[j] = voxelKey(world[j], leaf_m_);
+      index_.prefetch(keys[j]);
+    }
+    for (std::size_t j = 0; j < n; ++j) {
+      const auto [index, added] = index_.insert(keys[j], static_cast<std::uint32_t>(cells_.size()));
+      if (added) cells_.emplace_back();
+      Cell& c = cells_[index];
+      c.sum += world[j];
+      c.intensity += points_body[begin + j].intensity;
+      ++c.count;
+    }
   }
 }
 

@@ -172,9 +172,20 @@ void MappingBackend::closeSubmap() {
         const auto idx = [leaf](double v) { return static_cast<std::int64_t>(std::floor(v / leaf)); };
         return packVoxelKey(idx(w.x()), idx(w.y()), idx(w.z()));
       };
+      // The set holds a key per 5 cm of mapped surface (millions in a hall): keys are computed and
+      // their slots prefetched a block ahead of the inserts, which then wait on fewer cache misses.
+      constexpr std::size_t kBlock = 16;
+      std::uint64_t keys[kBlock];
       std::size_t kept = 0;
-      for (const Point& p : pts)
-        if (covered.insert(key(T_world_keyframe * p.xyz.cast<double>()))) pts[kept++] = p;
+      for (std::size_t begin = 0; begin < pts.size(); begin += kBlock) {
+        const std::size_t n = std::min(kBlock, pts.size() - begin);
+        for (std::size_t j = 0; j < n; ++j) {
+          keys[j] = key(T_world_keyframe * pts[begin + j].xyz.cast<double>());
+          covered.prefetch(keys[j]);
+        }
+        for (std::size_t j = 0; j < n; ++j)
+          if (covered.insert(keys[j])) pts[kept++] = pts[begin + j];
+      }
       pts.resize(kept);
     }
     new_voxels += pts.size();
