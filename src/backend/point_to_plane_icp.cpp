@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include "mmlio/core/so3.hpp"
 #include "mmlio/map/kd_tree.hpp"
@@ -91,6 +92,16 @@ const Eigen::Vector3d& IcpTarget::normal(std::size_t i) const {
 }
 bool IcpTarget::hasNormal(std::size_t i) const { return impl_->hasNormal(i); }
 
+int IcpTarget::nearestWithin(const Eigen::Vector3d& q, double max_dist_sq, int hint) const {
+  if (hint >= 0 && static_cast<std::size_t>(hint) < impl_->points.size()) {
+    // Only points strictly nearer than the bound are taken: just above the hint's distance, the
+    // hint itself still counts, and the nearest point is found as by the full search.
+    const double hint_sq = (impl_->points[static_cast<std::size_t>(hint)] - q).squaredNorm();
+    if (hint_sq < max_dist_sq) max_dist_sq = std::nextafter(hint_sq, std::numeric_limits<double>::infinity());
+  }
+  return nearestWithin(q, max_dist_sq);
+}
+
 int IcpTarget::nearestWithin(const Eigen::Vector3d& q, double max_dist_sq) const {
   if (impl_->points.empty()) return -1;
   std::uint32_t idx = 0;
@@ -113,6 +124,7 @@ IcpResult alignPointToPlane(const std::vector<Eigen::Vector3d>& source, const Ic
   Eigen::Isometry3d T = T_target_source_guess;
   const int levels = std::max(1, cfg.levels);
   std::vector<Eigen::Vector3d> src;
+  std::vector<int> previous;  // per source point, its match in the last iteration (-1: none)
   Matrix6d H;
   Vector6d g;
   int n_valid = 0;
@@ -127,14 +139,16 @@ IcpResult alignPointToPlane(const std::vector<Eigen::Vector3d>& source, const Ic
       src.resize(kept);
     }
     const double gate_sq = gate * gate;
+    previous.assign(src.size(), -1);
     for (int it = 0; it < cfg.max_iterations_per_level; ++it) {
       H.setZero();
       g.setZero();
       n_valid = 0;
       abs_sum = 0;
-      for (const auto& p : src) {
-        const Eigen::Vector3d x = T * p;
-        const int j = target.nearestWithin(x, gate_sq);
+      for (std::size_t i = 0; i < src.size(); ++i) {
+        const Eigen::Vector3d x = T * src[i];
+        const int j = target.nearestWithin(x, gate_sq, previous[i]);
+        previous[i] = j;
         if (j < 0 || !target.hasNormal(static_cast<std::size_t>(j))) continue;
         const Eigen::Vector3d& n = target.normal(static_cast<std::size_t>(j));
         const double r = n.dot(x - target.points()[static_cast<std::size_t>(j)]);
@@ -166,9 +180,10 @@ IcpResult alignPointToPlane(const std::vector<Eigen::Vector3d>& source, const Ic
   n_valid = 0;
   abs_sum = 0;
   int overlapping = 0;
-  for (const auto& p : src) {
-    const Eigen::Vector3d x = T * p;
-    const int j = target.nearestWithin(x, gate_sq);
+  if (previous.size() != src.size()) previous.assign(src.size(), -1);
+  for (std::size_t i = 0; i < src.size(); ++i) {
+    const Eigen::Vector3d x = T * src[i];
+    const int j = target.nearestWithin(x, gate_sq, previous[i]);
     if (j < 0) continue;
     ++overlapping;
     if (!target.hasNormal(static_cast<std::size_t>(j))) continue;

@@ -39,6 +39,9 @@ class IcpTarget {
   bool hasNormal(std::size_t i) const;
   /// Nearest target point to q closer than sqrt(max_dist_sq), or -1: the bound prunes the search.
   int nearestWithin(const Eigen::Vector3d& q, double max_dist_sq) const;
+  /// The same answer, searched only as far as target point `hint` (any index, or -1): ICP's
+  /// previous match of a source point bounds its next search to a few centimetres.
+  int nearestWithin(const Eigen::Vector3d& q, double max_dist_sq, int hint) const;
 
  private:
   struct Impl;
