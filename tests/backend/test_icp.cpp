@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <random>
 
 #include "mmlio/backend/point_to_plane_icp.hpp"
 #include "synthetic_scene.hpp"
@@ -81,6 +82,28 @@ TEST(PointToPlaneIcp, TargetNormalsArePlaneNormalsAndLinesHaveNone) {
     EXPECT_NEAR(std::abs(target.normal(i).z()), 1.0, 1e-9) << i;
   }
   for (std::size_t i = floor_points; i < pts.size(); i += 13) EXPECT_FALSE(target.hasNormal(i)) << i;
+}
+
+// A hint only bounds the search: whatever target point it names, near, far or beyond the gate, the
+// answer is the full search's. Points on a 5 cm grid make exact ties, which must resolve alike.
+TEST(PointToPlaneIcp, NearestWithAnyHintIsTheFullSearchsAnswer) {
+  std::vector<Eigen::Vector3d> grid;
+  for (int x = 0; x < 40; ++x)
+    for (int y = 0; y < 40; ++y) grid.emplace_back(0.05 * x, 0.05 * y, 0.01 * ((x * 7 + y * 3) % 5));
+  const IcpTarget target(grid);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-0.2, 2.2);
+  std::uniform_int_distribution<int> any(-1, static_cast<int>(grid.size()) - 1);
+  int found = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const Eigen::Vector3d q(u(rng), u(rng), 0.025 * (i % 3));
+    const double gate_sq = i % 2 ? 0.01 : 0.25;
+    const int full = target.nearestWithin(q, gate_sq);
+    found += full >= 0;
+    ASSERT_EQ(target.nearestWithin(q, gate_sq, any(rng)), full) << i;
+    if (full >= 0) ASSERT_EQ(target.nearestWithin(q, gate_sq, full), full) << i;
+  }
+  EXPECT_GT(found, 2000);
 }
 
 TEST(PointToPlaneIcp, VoxelCentroidsKeepsOnePointPerVoxel) {
