@@ -14,14 +14,6 @@ bool SweepView::seesThrough(const Eigen::Vector3d& p_world) const {
   return false;
 }
 
-void SweepView::count(const Eigen::Vector3d& p_world, int* free, int* hit) const {
-  for (const SensorView& s : sensors) {
-    const map::Visibility v = s.image.classify(s.T_sensor_world * p_world);
-    *free += v == map::Visibility::kFree;
-    *hit += v == map::Visibility::kHit;
-  }
-}
-
 std::size_t SweepView::memoryBytes() const {
   std::size_t n = sizeof(*this);
   for (const SensorView& s : sensors) n += sizeof(s) + s.image.memoryBytes();
@@ -45,12 +37,19 @@ std::vector<std::uint8_t> FreeSpaceMemory::movedIn(const std::vector<Eigen::Vect
   if (asked.empty()) return flags;
   // Seen through by one of them and seen on by none: a point on a silhouette edge, which one view
   // may see past by a hair, is seen on by the other.
+  // One sensor seeing a surface there settles it (most points: static ones), so the rest are not asked.
+  const auto moved = [&](const Eigen::Vector3d& p) {
+    bool free = false;
+    for (const SweepView* v : asked)
+      for (const SensorView& s : v->sensors) {
+        const map::Visibility seen = s.image.classify(s.T_sensor_world * p);
+        if (seen == map::Visibility::kHit) return false;
+        free = free || seen == map::Visibility::kFree;
+      }
+    return free;
+  };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      int free = 0, hit = 0;
-      for (const SweepView* v : asked) v->count(points[i], &free, &hit);
-      flags[i] = free > 0 && hit == 0;
-    }
+    for (std::size_t i = r.begin(); i < r.end(); ++i) flags[i] = moved(points[i]) ? 1 : 0;
   });
   return flags;
 }

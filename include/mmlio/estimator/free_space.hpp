@@ -44,8 +44,6 @@ struct SweepView {
   void place(const Eigen::Isometry3d& T_world_body);
   /// Free in at least one sensor's view (seen through).
   bool seesThrough(const Eigen::Vector3d& p_world) const;
-  /// Counts over the sensors: seen through, and returns at the point's range.
-  void count(const Eigen::Vector3d& p_world, int* free, int* hit) const;
   std::size_t memoryBytes() const;
 };
 
