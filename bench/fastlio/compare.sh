@@ -47,7 +47,7 @@ build() {
   mkdir -p "$WORK"
   # MP_PROC_NUM=1: FAST-LIO2's own choice on a machine with fewer than four cores.
   g++ -O3 -std=c++14 -fopenmp -DMP_PROC_NUM=1 -DROOT_DIR=\"$WORK/\" \
-    -I"$ROOT/bench/fastlio/stub" -I"$src/include" -I/usr/include/pcl-1.13 -I/usr/include/eigen3 -I"${py% *}" \
+    -I"$ROOT/bench/fastlio/stub" -I"$ROOT/include" -I"$src/include" -I/usr/include/pcl-1.13 -I/usr/include/eigen3 -I"${py% *}" \
     "$src/src/laserMapping.cpp" "$src/src/preprocess.cpp" "$src/include/ikd-Tree/ikd_Tree.cpp" -o "$BIN" \
     -lroscpp -lrosconsole -lroscpp_serialization -lrostime -lxmlrpcpp -lcpp_common -ltf -ltf2_ros -ltf2 \
     -lpcl_common -lpcl_io -lpcl_filters -lpcl_kdtree -lpcl_search -lpython"${py#* }" -lboost_system -lpthread
