@@ -16,12 +16,12 @@ System::System(const io::RigConfig& cfg, const std::string& mode, SweepObserver 
       observer_(std::move(observer)),
       mapping_(cfg.mapping),
       degeneracy_(cfg.estimator.degeneracy.min_points, cfg.estimator.remap_degenerate),
-      online_(cfg, mode_, [this](const estimator::SweepResult& r) { onSweep(r); }) {
+      online_(cfg, mode_, [this](estimator::SweepResult r) { onSweep(std::move(r)); }) {
   dynamic_.enabled = cfg.estimator.dynamic.enabled;
   dynamic_.clean_map = cfg.mapping.clean_map;
 }
 
-void System::onSweep(const estimator::SweepResult& r) {
+void System::onSweep(estimator::SweepResult r) {
   if (r.status == estimator::SweepResult::Status::kInitializing) {
     ++sweeps_.initialising;
     return;
@@ -42,8 +42,10 @@ void System::onSweep(const estimator::SweepResult& r) {
     f.planes += l.planes;
     f.bad_frames += l.bad_frame ? 1 : 0;
   }
-  if (!finished_) mapping_.addSweep(r);  // a copy: the back end works on it on its own thread
   StageTimes times = r.times_ms;
+  // The back end works on the sweep on its own thread: it takes it, or a copy if an observer (the
+  // live node publishing the sweep's points) still needs it.
+  if (!finished_) mapping_.addSweep(observer_ ? r : std::move(r));
   times.emplace_back("mapping_handoff", handoff.lapMs());
   timing_.add(times);
   if (observer_) observer_(r);

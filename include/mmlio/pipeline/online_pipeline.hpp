@@ -18,7 +18,7 @@ namespace mmlio::pipeline {
 
 class OnlinePipeline {
  public:
-  using SweepCallback = std::function<void(const estimator::SweepResult&)>;
+  using SweepCallback = std::function<void(estimator::SweepResult)>;  // the callee may keep it
 
   /// Throws mmlio::Error on a bad mode or a config with no active LiDAR.
   OnlinePipeline(const io::RigConfig& cfg, const std::string& mode, SweepCallback on_sweep);

@@ -66,7 +66,7 @@ class System {
   const std::string& mode() const { return mode_; }
 
  private:
-  void onSweep(const estimator::SweepResult& r);
+  void onSweep(estimator::SweepResult r);
   /// Estimator stamps back in the input's time (they differ after a time-base jump).
   Trajectory inputTime(Trajectory trajectory) const;
 
