@@ -135,11 +135,12 @@ struct Odometry::Impl {
   }
 
   // ---- stage: de-skew, features, bad frame, merge ----
-  Features extract(const lidar::AlignedSweep& sweep, const lidar::SweepMotion& motion, SweepResult* out) {
+  // The sweep's scans are moved into their de-skewed copies.
+  Features extract(lidar::AlignedSweep& sweep, const lidar::SweepMotion& motion, SweepResult* out) {
     const double end_s = toSec(sweep.end_ns - sweep.start_ns);
     edge_poor.assign(lidars.size(), 0);
-    std::vector<const LidarScan*> scans;
-    for (const auto& scan : sweep.scans)
+    std::vector<LidarScan*> scans;
+    for (auto& scan : sweep.scans)
       if (setupOf(scan.sensor)) scans.push_back(&scan);
     std::vector<lidar::FeatureCloud> clouds(scans.size());
     std::vector<LidarScan> deskewed(scans.size());
@@ -147,7 +148,7 @@ struct Odometry::Impl {
     std::vector<SensorView> views(cfg.dynamic.enabled ? scans.size() : 0);
     tbb::parallel_for(std::size_t(0), scans.size(), [&](std::size_t i) {
       const LidarSetup& setup = *setupOf(scans[i]->sensor);
-      deskewed[i] = *scans[i];
+      deskewed[i] = std::move(*scans[i]);
       lidar::deskewToEnd(deskewed[i], setup.extrinsic.T_imu_sensor, motion, end_s);
       if (!views.empty()) {
         views[i].T_body_sensor = setup.extrinsic.T_imu_sensor;
@@ -173,15 +174,15 @@ struct Odometry::Impl {
     std::size_t n_edges = 0, n_planes = 0, n_points = 0;
     for (std::size_t i = 0; i < scans.size(); ++i) {
       n_edges += clouds[i].edges.size();
-      n_planes += usesSurfacePoints(scans[i]->sensor) ? deskewed[i].points.size() : clouds[i].planes.size();
+      n_planes += usesSurfacePoints(deskewed[i].sensor) ? deskewed[i].points.size() : clouds[i].planes.size();
       n_points += deskewed[i].points.size();
     }
     edges.reserve(n_edges);
     planes.reserve(n_planes);
     if (cfg.keep_points) out->points_body.reserve(n_points);
     for (std::size_t i = 0; i < scans.size(); ++i) {
-      const Eigen::Isometry3f T = setupOf(scans[i]->sensor)->extrinsic.T_imu_sensor.cast<float>();
-      const auto source = static_cast<std::uint8_t>(indexOf(scans[i]->sensor));
+      const Eigen::Isometry3f T = setupOf(deskewed[i].sensor)->extrinsic.T_imu_sensor.cast<float>();
+      const auto source = static_cast<std::uint8_t>(indexOf(deskewed[i].sensor));
       auto toBody = [&T, source](const std::vector<Point>& pts, std::vector<Point>* dst) {
         for (Point p : pts) {
           p.xyz = T * p.xyz;
@@ -194,7 +195,7 @@ struct Odometry::Impl {
       if (keep_for_judgement) edge_poor[source] = 1;
       if (!stats[i].bad_frame || keep_for_judgement) {
         toBody(clouds[i].edges, &edges);
-        toBody(usesSurfacePoints(scans[i]->sensor) ? deskewed[i].points : clouds[i].planes, &planes);
+        toBody(usesSurfacePoints(deskewed[i].sensor) ? deskewed[i].points : clouds[i].planes, &planes);
       }
       if (cfg.keep_points) toBody(deskewed[i].points, &out->points_body);
     }
@@ -486,7 +487,7 @@ const imu::ImuInitResult& Odometry::imuInit() const { return impl_->init_result;
 std::size_t Odometry::keyframes() const { return impl_->keyframes; }
 Stamp Odometry::lastImuNs() const { return impl_->imu.empty() ? 0 : impl_->imu.back().stamp_ns; }
 
-SweepResult Odometry::process(const lidar::AlignedSweep& sweep) {
+SweepResult Odometry::process(lidar::AlignedSweep sweep) {
   auto& d = *impl_;
   SweepResult out;
   Stopwatch watch;

@@ -114,7 +114,7 @@ void OnlinePipeline::drain(bool all) {
     for (auto& s : aligner_.flush()) pending_.push_back(std::move(s));
   }
   while (!pending_.empty() && (all || pending_.front().end_ns <= odometry_.lastImuNs())) {
-    estimator::SweepResult r = odometry_.process(pending_.front());
+    estimator::SweepResult r = odometry_.process(std::move(pending_.front()));
     pending_.pop_front();
     ++processed_;
     on_sweep_(std::move(r));

@@ -111,7 +111,7 @@ class Odometry {
 
   void addImu(const ImuSample& sample);
   /// Processes one fused sweep. Requires IMU up to sweep.end_ns (else propagates at constant velocity).
-  SweepResult process(const lidar::AlignedSweep& sweep);
+  SweepResult process(lidar::AlignedSweep sweep);
 
   bool initialized() const;
   const imu::ImuInitResult& imuInit() const;
