@@ -180,7 +180,6 @@ IcpResult alignPointToPlane(const std::vector<Eigen::Vector3d>& source, const Ic
   n_valid = 0;
   abs_sum = 0;
   int overlapping = 0;
-  if (previous.size() != src.size()) previous.assign(src.size(), -1);
   for (std::size_t i = 0; i < src.size(); ++i) {
     const Eigen::Vector3d x = T * src[i];
     const int j = target.nearestWithin(x, gate_sq, previous[i]);

@@ -1,19 +1,10 @@
 #include "mmlio/pipeline/map_accumulator.hpp"
 
 #include <algorithm>
-#include <cmath>
 
 #include "mmlio/core/voxel_key.hpp"
 
 namespace mmlio::pipeline {
-namespace {
-
-std::uint64_t voxelKey(const Eigen::Vector3d& p, double leaf) {
-  const auto idx = [leaf](double v) { return static_cast<std::int64_t>(std::floor(v / leaf)); };
-  return packVoxelKey(idx(p.x()), idx(p.y()), idx(p.z()));
-}
-
-}  // namespace
 
 MapAccumulator::MapAccumulator(double leaf_m) : leaf_m_(leaf_m) {}
 
@@ -35,7 +26,7 @@ void MapAccumulator::add(const std::vector<Point>& points_body, const Eigen::Iso
     const std::size_t n = std::min(kBlock, points_body.size() - begin);
     for (std::size_t j = 0; j < n; ++j) {
       world[j] = T_world_body * points_body[begin + j].xyz.cast<double>();
-      keys[j] = voxelKey(world[j], leaf_m_);
+      keys[j] = voxelKeyOf(world[j], leaf_m_);
       index_.prefetch(keys[j]);
     }
     for (std::size_t j = 0; j < n; ++j) {

@@ -18,8 +18,7 @@ constexpr double kMovedCellM = 0.5;
 constexpr std::uint32_t kMinMoverReturns = 8;
 
 std::uint64_t cellKey(const Eigen::Vector3d& p, int dx = 0, int dy = 0, int dz = 0) {
-  const auto idx = [](double v) { return static_cast<std::int64_t>(std::floor(v / kMovedCellM)); };
-  return packVoxelKey(idx(p.x()) + dx, idx(p.y()) + dy, idx(p.z()) + dz);
+  return voxelKeyOf(p, kMovedCellM, dx, dy, dz);
 }
 
 }  // namespace
@@ -168,10 +167,6 @@ void MappingBackend::closeSubmap() {
       // Revisits add nothing new: drop voxels an earlier keyframe already holds. Loops corrected
       // later move each point with the keyframe that kept it, so the map stays consistent.
       auto& covered = covered_[lidar];
-      const auto key = [leaf](const Eigen::Vector3d& w) {
-        const auto idx = [leaf](double v) { return static_cast<std::int64_t>(std::floor(v / leaf)); };
-        return packVoxelKey(idx(w.x()), idx(w.y()), idx(w.z()));
-      };
       // The set holds a key per 5 cm of mapped surface (millions in a hall): keys are computed and
       // their slots prefetched a block ahead of the inserts, which then wait on fewer cache misses.
       constexpr std::size_t kBlock = 16;
@@ -180,7 +175,7 @@ void MappingBackend::closeSubmap() {
       for (std::size_t begin = 0; begin < pts.size(); begin += kBlock) {
         const std::size_t n = std::min(kBlock, pts.size() - begin);
         for (std::size_t j = 0; j < n; ++j) {
-          keys[j] = key(T_world_keyframe * pts[begin + j].xyz.cast<double>());
+          keys[j] = voxelKeyOf(T_world_keyframe * pts[begin + j].xyz.cast<double>(), leaf);
           covered.prefetch(keys[j]);
         }
         for (std::size_t j = 0; j < n; ++j)

@@ -11,10 +11,7 @@
 
 namespace mmlio::sim {
 
-std::uint64_t surfaceVoxelOf(const Eigen::Vector3d& p) {
-  const auto idx = [](double v) { return static_cast<std::int64_t>(std::floor(v / kOnSurfaceM)); };
-  return packVoxelKey(idx(p.x()), idx(p.y()), idx(p.z()));
-}
+std::uint64_t surfaceVoxelOf(const Eigen::Vector3d& p) { return voxelKeyOf(p, kOnSurfaceM); }
 
 MapScore scoreMap(const Scene& scene, const std::vector<Eigen::Vector3d>& map) {
   MapScore s;
