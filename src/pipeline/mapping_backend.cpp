@@ -201,15 +201,19 @@ void MappingBackend::closeSubmap() {
 }
 
 std::vector<Point> MappingBackend::mergedMap(const std::string* only_lidar) const {
-  MapAccumulator merged(cfg_.map_leaf_m);
-  const auto addAt = [&](const std::vector<Point>& pts, std::size_t k) { merged.add(pts, graph_.pose(static_cast<int>(k))); };
+  std::vector<PosedPoints> clouds;
   for (std::size_t k = 0; k < submaps_.size(); ++k)
     for (const auto& [lidar, pts] : submaps_[k])
-      if (!only_lidar || lidar == *only_lidar) addAt(pts, k);
-  if (!submaps_.empty())  // the newest keyframe's submap is still open
+      if (!only_lidar || lidar == *only_lidar) clouds.push_back({&pts, graph_.pose(static_cast<int>(k))});
+  std::vector<std::vector<Point>> open;  // the newest keyframe's submap, if still open
+  open.reserve(open_.size());
+  if (!submaps_.empty())
     for (const auto& [lidar, acc] : open_)
-      if (!only_lidar || lidar == *only_lidar) addAt(acc.points(), submaps_.size() - 1);
-  return merged.points();
+      if (!only_lidar || lidar == *only_lidar) {
+        open.push_back(acc.points());
+        clouds.push_back({&open.back(), graph_.pose(static_cast<int>(submaps_.size()) - 1)});
+      }
+  return mergeIntoVoxels(clouds, cfg_.map_leaf_m);
 }
 
 std::vector<Point> MappingBackend::map() const { return mergedMap(nullptr); }
