@@ -27,6 +27,15 @@ std::vector<MapMatch> findMapMatches(const Features& f, const Eigen::Isometry3d&
       const Eigen::Vector3d q = T_world_body * p;
       MapMatch& m = matches[i];
       if (plane) {
+        // A point in a planar map voxel near its plane takes that plane: a lookup instead of a kNN
+        // search and a fit, from up to 60 points instead of 5.
+        const map::VoxelHashMap::VoxelPlane* vp = plane_map.planeAt(q);
+        if (vp && std::abs(vp->normal.dot(q) + vp->d) <= cfg.voxel_plane_gate_m) {
+          m = {MapMatch::Kind::kPlane, f.plane_source.empty() ? std::uint8_t{0} : f.plane_source[i], p, vp->normal,
+               Eigen::Vector3d(vp->d, 0, 0)};
+          found[i] = 1;
+          continue;
+        }
         if (plane_map.knn(q, cfg.neighbours, cfg.max_distance_m, &nn) < cfg.neighbours) continue;
         const map::PlaneFit fit = map::fitPlane(nn, 0.1);
         if (!fit.ok) continue;

@@ -9,13 +9,15 @@
 #include <utility>
 
 #include "mmlio/core/voxel_key.hpp"
+#include "mmlio/map/geometry_fit.hpp"
 
 namespace mmlio::map {
 
-VoxelHashMap::VoxelHashMap(double voxel_m, int max_points_per_voxel)
+VoxelHashMap::VoxelHashMap(double voxel_m, int max_points_per_voxel, bool fit_planes)
     : voxel_m_(voxel_m > 0 ? voxel_m : 1.0),
       inv_voxel_(1.0 / voxel_m_),
-      max_points_per_voxel_(std::max(1, max_points_per_voxel)) {}
+      max_points_per_voxel_(std::max(1, max_points_per_voxel)),
+      fit_planes_(fit_planes) {}
 
 VoxelHashMap::Key VoxelHashMap::keyOf(const Eigen::Vector3d& p) const {
   return Key{static_cast<int>(std::floor(p.x() * inv_voxel_)), static_cast<int>(std::floor(p.y() * inv_voxel_)),
@@ -36,7 +38,9 @@ std::pair<std::uint32_t, bool> VoxelHashMap::findOrAdd(const Key& k) {
   std::uint32_t& slot = bricks_[b][slotInBrick(k)];
   if (slot != kNone) return {slot, false};
   slot = static_cast<std::uint32_t>(voxels_.size());
-  voxels_.push_back({k});
+  Voxel voxel;
+  voxel.key = k;
+  voxels_.push_back(voxel);
   return {slot, true};
 }
 
@@ -102,6 +106,7 @@ void VoxelHashMap::add(const std::vector<Eigen::Vector3d>& world_points) {
       v.capacity = capacity;
     }
     points_[v.begin + v.count++] = p;
+    v.plane = Voxel::Plane::kStale;
     ++num_points_;
   }
   // Rewritten once a third of it holds no point (spans moved away, removed points, room to grow):
@@ -139,6 +144,7 @@ std::size_t VoxelHashMap::removeIf(const Eigen::Vector3d& center, double radius_
       if ((p - center).squaredNorm() <= r2 && remove(p)) removed[i].push_back(p);
       else points[kept++] = p;
     }
+    if (kept != v.count) v.plane = Voxel::Plane::kStale;
     v.count = kept;
   });
   std::size_t total = 0;
@@ -250,6 +256,31 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
   out->reserve(static_cast<std::size_t>(found));
   for (int i = 0; i < found; ++i) out->push_back(*best[i].second);
   return static_cast<int>(out->size());
+}
+
+const VoxelHashMap::VoxelPlane* VoxelHashMap::planeAt(const Eigen::Vector3d& q) const {
+  if (!fit_planes_) return nullptr;
+  const Key k = keyOf(q);
+  const std::uint32_t b = brick_index_.find(brickKey(k));
+  if (b == kNone) return nullptr;
+  const std::uint32_t v = bricks_[b][slotInBrick(k)];
+  if (v == kNone || voxels_[v].plane != Voxel::Plane::kFitted) return nullptr;
+  return &voxels_[v].fit;
+}
+
+void VoxelHashMap::refitPlanes() {
+  if (!fit_planes_) return;
+  std::vector<Eigen::Vector3d> pts;
+  for (Voxel& v : voxels_) {
+    if (v.plane != Voxel::Plane::kStale) continue;
+    v.plane = Voxel::Plane::kNone;
+    if (v.count < kPlaneMinPoints) continue;
+    pts.assign(pointsOf(v), pointsOf(v) + v.count);
+    const PlaneFit fit = fitPlane(pts, kPlaneMaxResidualM);
+    if (!fit.ok) continue;
+    v.fit = {fit.normal, fit.d};
+    v.plane = Voxel::Plane::kFitted;
+  }
 }
 
 void VoxelHashMap::clear() {

@@ -154,3 +154,76 @@ TEST(VoxelHashMap, RemoveIfDropsOnlyThePointsWithinTheRadiusThatThePredicateName
 }
 
 }  // namespace mmlio::map
+
+namespace {
+
+// n points of the plane z = 0.2 + 0.1 x (noise +-noise_m) inside the voxel [0, 0.5)^3.
+std::vector<Eigen::Vector3d> tiltedPatch(int n, double noise_m, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.02, 0.48), e(-noise_m, noise_m);
+  std::vector<Eigen::Vector3d> pts;
+  for (int i = 0; i < n; ++i) {
+    const double x = u(rng), y = u(rng);
+    pts.emplace_back(x, y, 0.2 + 0.1 * x + e(rng));
+  }
+  return pts;
+}
+
+}  // namespace
+
+TEST(VoxelHashMap, APlanarVoxelKeepsItsPlaneOnceRefitted) {
+  VoxelHashMap map(0.5, 60, true);
+  map.add(tiltedPatch(30, 0.005, 1));
+  const Eigen::Vector3d q(0.25, 0.25, 0.225);
+  EXPECT_EQ(map.planeAt(q), nullptr) << "a changed voxel has no plane until refitted";
+  map.refitPlanes();
+  const VoxelHashMap::VoxelPlane* plane = map.planeAt(q);
+  ASSERT_NE(plane, nullptr);
+  const Eigen::Vector3d truth = Eigen::Vector3d(-0.1, 0.0, 1.0).normalized();
+  EXPECT_GT(std::abs(plane->normal.dot(truth)), 0.999);
+  EXPECT_NEAR(plane->normal.norm(), 1.0, 1e-12);
+  EXPECT_LT(std::abs(plane->normal.dot(q) + plane->d), 0.01) << "q lies on the patch";
+  EXPECT_EQ(map.planeAt(Eigen::Vector3d(0.75, 0.25, 0.25)), nullptr) << "an empty voxel";
+
+  VoxelHashMap plain(0.5, 60);
+  plain.add(tiltedPatch(30, 0.005, 1));
+  plain.refitPlanes();
+  EXPECT_EQ(plain.planeAt(q), nullptr) << "only maps built with fit_planes keep planes";
+}
+
+TEST(VoxelHashMap, ACornerASparseOrARoughVoxelHasNoPlane) {
+  VoxelHashMap map(0.5, 60, true);
+  // Corner: the floor patch of voxel [0, 0.5)^3 and a wall at x = 0.45 in the same voxel.
+  std::vector<Eigen::Vector3d> corner = tiltedPatch(20, 0.0, 2);
+  for (int i = 0; i < 20; ++i) corner.emplace_back(0.45, 0.02 + 0.02 * i, 0.05 + 0.02 * i);
+  map.add(corner);
+  // Too few points: 9 in voxel [1, 1.5) x [0, 0.5)^2.
+  std::vector<Eigen::Vector3d> sparse = tiltedPatch(VoxelHashMap::kPlaneMinPoints - 1, 0.0, 3);
+  for (auto& p : sparse) p.x() += 1.0;
+  map.add(sparse);
+  // Rough: +-8 cm about the plane, beyond kPlaneMaxResidualM, in voxel [2, 2.5) x [0, 0.5)^2.
+  std::vector<Eigen::Vector3d> rough = tiltedPatch(40, 0.08, 4);
+  for (auto& p : rough) p.x() += 2.0;
+  map.add(rough);
+  map.refitPlanes();
+  EXPECT_EQ(map.planeAt(Eigen::Vector3d(0.25, 0.25, 0.25)), nullptr);
+  EXPECT_EQ(map.planeAt(Eigen::Vector3d(1.25, 0.25, 0.25)), nullptr);
+  EXPECT_EQ(map.planeAt(Eigen::Vector3d(2.25, 0.25, 0.25)), nullptr);
+}
+
+TEST(VoxelHashMap, RemovingTheWallFromACornerVoxelLeavesTheFloorsPlane) {
+  VoxelHashMap map(0.5, 60, true);
+  std::vector<Eigen::Vector3d> corner = tiltedPatch(20, 0.0, 5);
+  for (int i = 0; i < 20; ++i) corner.emplace_back(0.45, 0.02 + 0.02 * i, 0.3 + 0.005 * i);
+  map.add(corner);
+  map.refitPlanes();
+  const Eigen::Vector3d q(0.25, 0.25, 0.225);
+  ASSERT_EQ(map.planeAt(q), nullptr);
+  const auto on_wall = [](const Eigen::Vector3d& p) { return p.x() == 0.45; };
+  EXPECT_EQ(map.removeIf(Eigen::Vector3d::Zero(), 5.0, on_wall), 20u);
+  EXPECT_EQ(map.planeAt(q), nullptr) << "changed: stale until refitted";
+  map.refitPlanes();
+  const VoxelHashMap::VoxelPlane* plane = map.planeAt(q);
+  ASSERT_NE(plane, nullptr);
+  EXPECT_GT(std::abs(plane->normal.dot(Eigen::Vector3d(-0.1, 0.0, 1.0).normalized())), 0.9999);
+}

@@ -1,7 +1,8 @@
 #pragma once
 // Correspondences of body-frame feature points with the local map, found at a pose estimate:
 // each edge point gets the line through its k nearest edge-map points, each plane point the
-// plane through its k nearest plane-map points (paper eqs. edge_cost / plane_cost). The residuals
+// plane through its k nearest plane-map points (paper eqs. edge_cost / plane_cost), or, in a map
+// that keeps voxel planes, the plane of its voxel when it lies near one. The residuals
 // themselves are PointToEdgeFactor / PointToPlaneFactor (lidar_factors.hpp).
 #include <ceres/cost_function.h>
 
@@ -32,6 +33,7 @@ struct MapMatch {
 struct MapMatchConfig {
   double max_distance_m = 1.0;  // farther map neighbours make no correspondence
   int neighbours = 5;           // map points per line / plane fit
+  double voxel_plane_gate_m = 0.1;  // a point takes its map voxel's plane only if this near it
 };
 
 /// Matches found at one pose hold at another until the pose has moved this far from where they

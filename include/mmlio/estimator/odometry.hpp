@@ -47,6 +47,7 @@ struct OdometryConfig {
   int registration_max_planes = 0;
   SurfacePoints surface_points = SurfacePoints::kSolidState;
   double map_voxel_m = 0.2;             // local map resolution
+  bool voxel_planes = true;             // planar local-map cells match by their plane, not a kNN fit
   double local_map_radius_m = 60.0;     // local map kept around the current pose
   int window_size = 4;                  // keyframes in the sliding window
   double keyframe_rotation_deg = 30.0;  // new keyframe after this rotation ...

@@ -17,8 +17,9 @@ namespace mmlio::map {
 
 class VoxelHashMap {
  public:
-  /// voxel_m: voxel edge (m); max_points_per_voxel: further points falling in a full voxel are dropped.
-  VoxelHashMap(double voxel_m, int max_points_per_voxel);
+  /// voxel_m: voxel edge (m); max_points_per_voxel: further points falling in a full voxel are
+  /// dropped; fit_planes: keep a plane per voxel whose points form one (planeAt).
+  VoxelHashMap(double voxel_m, int max_points_per_voxel, bool fit_planes = false);
 
   void add(const std::vector<Eigen::Vector3d>& world_points);
   /// Drops every voxel whose first point lies farther than radius_m from center.
@@ -34,6 +35,20 @@ class VoxelHashMap {
   /// Exact: scans the 27 voxels around q, then further rings until no closer point can exist.
   /// Returns the number found.
   int knn(const Eigen::Vector3d& q, int k, double max_dist_m, std::vector<Eigen::Vector3d>* out) const;
+
+  /// With fit_planes, the plane through the points of q's voxel if they form one: at least
+  /// kPlaneMinPoints, all within kPlaneMaxResidualM of it. Null otherwise, and for a voxel changed
+  /// since the last refitPlanes().
+  struct VoxelPlane {
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit
+    double d = 0.0;                                     // n.x + d = 0
+  };
+  static constexpr std::uint32_t kPlaneMinPoints = 10;
+  static constexpr double kPlaneMaxResidualM = 0.05;
+  const VoxelPlane* planeAt(const Eigen::Vector3d& q) const;
+  /// Fits the planes of the voxels changed since the last call (once per map update: queries
+  /// run in parallel and only read).
+  void refitPlanes();
 
   std::size_t size() const { return num_points_; }  // points stored
   bool empty() const { return num_points_ == 0; }
@@ -58,6 +73,8 @@ class VoxelHashMap {
   struct Voxel {
     Key key;
     std::uint32_t begin = 0, count = 0, capacity = 0;  // span of points_
+    enum class Plane : std::uint8_t { kStale, kNone, kFitted } plane = Plane::kStale;
+    VoxelPlane fit;
   };
   static constexpr int kBrickShift = 2;  // bricks of 4 voxels a side
   static constexpr int kBrickMask = (1 << kBrickShift) - 1;
@@ -78,6 +95,7 @@ class VoxelHashMap {
   double voxel_m_;
   double inv_voxel_;
   int max_points_per_voxel_;
+  bool fit_planes_;
   std::size_t num_points_ = 0;
   std::vector<Voxel> voxels_;
   using Arena = std::vector<Eigen::Vector3d, HugePageAllocator<Eigen::Vector3d>>;
