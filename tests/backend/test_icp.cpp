@@ -101,7 +101,9 @@ TEST(PointToPlaneIcp, NearestWithAnyHintIsTheFullSearchsAnswer) {
     const int full = target.nearestWithin(q, gate_sq);
     found += full >= 0;
     ASSERT_EQ(target.nearestWithin(q, gate_sq, any(rng)), full) << i;
-    if (full >= 0) ASSERT_EQ(target.nearestWithin(q, gate_sq, full), full) << i;
+    if (full >= 0) {
+      ASSERT_EQ(target.nearestWithin(q, gate_sq, full), full) << i;
+    }
   }
   EXPECT_GT(found, 2000);
 }
