@@ -458,7 +458,6 @@ struct Odometry::Impl {
     plane_map.add(p);
     edge_map.removeFarFrom(T.translation(), cfg.local_map_radius_m);
     plane_map.removeFarFrom(T.translation(), cfg.local_map_radius_m);
-    plane_map.refitPlanes();
   }
 
   void trimImu() {
@@ -624,8 +623,8 @@ SweepResult Odometry::process(lidar::AlignedSweep sweep) {
     if (d.view) {
       d.view->place(state.pose());
       out.carved_points = d.carveMap(state.p_world, &out.moved_world);
-      d.plane_map.refitPlanes();
     }
+    d.plane_map.refitPlanes();  // once, after this keyframe's additions, trim and carving
     d.pre_since_keyframe = std::make_shared<imu::Preintegration>(state.bias, d.cfg.imu_noise);
     ++d.keyframes;
   } else {

@@ -83,7 +83,7 @@ void bindOdometry(YamlBinder& b, estimator::OdometryConfig& c) {
   b.field("map_voxel_m", c.map_voxel_m, "local map resolution, m");
   b.field("voxel_planes", c.voxel_planes,
           "a plane feature in a planar cell of the local map (10+ points within 5 cm of one plane) matches "
-          "that plane instead of a plane fitted to its 5 nearest map points: same accuracy, hall run 13-17 % "
+          "that plane instead of a plane fitted to its 5 nearest map points: same accuracy, hall run 11-17 % "
           "cheaper (README, Speed)");
   b.field("local_map_radius_m", c.local_map_radius_m, "local map kept around the current pose, m");
   b.field("window_size", c.window_size, "keyframes in the sliding window");

@@ -8,6 +8,18 @@
 #include "mmlio/core/voxel_key.hpp"
 
 namespace mmlio::pipeline {
+namespace {
+
+// A voxel's output point, by MapAccumulator and mergeIntoVoxels alike (their results must agree
+// bit for bit).
+Point centroid(const Eigen::Vector3d& sum, double intensity_sum, std::uint32_t count) {
+  Point p;
+  p.xyz = (sum / count).cast<float>();
+  p.intensity = static_cast<float>(intensity_sum / count);
+  return p;
+}
+
+}  // namespace
 
 MapAccumulator::MapAccumulator(double leaf_m) : leaf_m_(leaf_m) {}
 
@@ -55,12 +67,7 @@ std::vector<Point> MapAccumulator::points() const {
   if (leaf_m_ <= 0.0) return raw_;
   std::vector<Point> out;
   out.reserve(cells_.size());
-  for (const Cell& c : cells_) {
-    Point p;
-    p.xyz = (c.sum / c.count).cast<float>();
-    p.intensity = static_cast<float>(c.intensity / c.count);
-    out.push_back(p);
-  }
+  for (const Cell& c : cells_) out.push_back(centroid(c.sum, c.intensity, c.count));
   return out;
 }
 
@@ -106,13 +113,9 @@ std::vector<Point> mergeIntoVoxels(const std::vector<PosedPoints>& clouds, doubl
       sum += worldPoint(keyed[end].cloud, keyed[end].index);
       intensity += (*clouds[keyed[end].cloud].points)[keyed[end].index].intensity;
     }
-    const auto count = static_cast<std::uint32_t>(end - begin);
-    Point p;
-    p.xyz = (sum / count).cast<float>();
-    p.intensity = static_cast<float>(intensity / count);
     first_hit.push_back(static_cast<std::uint64_t>(offset[keyed[begin].cloud] + keyed[begin].index) << 32 |
                         voxels.size());
-    voxels.push_back(p);
+    voxels.push_back(centroid(sum, intensity, static_cast<std::uint32_t>(end - begin)));
     begin = end;
   }
   keyed = {};
