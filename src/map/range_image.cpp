@@ -93,6 +93,79 @@ RangeImage::RangeImage(const std::vector<Point>& points, const RangeImageConfig&
     std::uint16_t& cell = ranges_[slot * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(x)];
     if (cell == 0 || c.cm < cell) cell = c.cm;
   }
+  summariseWindows();
+}
+
+int RangeImage::windowColumn(int arc_col) const {
+  const int wc = cfg_.window_cols;
+  if (window_width_ == circle_cols_) return arc_col;  // the windows reach round the whole circle
+  if (arc_col < cols_ + wc) return arc_col;
+  if (arc_col >= circle_cols_ - wc) return cols_ + wc + (arc_col - (circle_cols_ - wc));  // just before col0_
+  return -1;
+}
+
+// Two passes, as the window is a box: along each stored column, what lies within window_rows of
+// every row (scattered from the returns: a spinning LiDAR's 16 rings fill few of the rows); then
+// across window_cols of those columns. Column-major, so both passes run along contiguous memory.
+void RangeImage::summariseWindows() {
+  const int wr = cfg_.window_rows, wc = cfg_.window_cols;
+  const int ext_rows = rows_ + 2 * wr;
+  const auto ext = static_cast<std::size_t>(ext_rows);
+  constexpr std::uint16_t kNone = 0xffff;  // as a nearest range: larger than any saturated one
+  constexpr std::uint8_t kBelow = 1, kAbove = 2;
+  thread_local std::vector<std::uint16_t> nearest;  // per column and row: the nearest return within wr rows
+  thread_local std::vector<std::uint8_t> sides;     // ... and whether one lies at or below, at or above
+  thread_local std::vector<std::pair<int, int>> stored;  // (row, slot) of the rows with returns
+  nearest.assign(ext * static_cast<std::size_t>(cols_), kNone);
+  sides.assign(ext * static_cast<std::size_t>(cols_), 0);
+  stored.clear();
+  for (int y = 0; y < rows_; ++y)
+    if (slot_of_row_[static_cast<std::size_t>(y)] >= 0) stored.emplace_back(y, slot_of_row_[static_cast<std::size_t>(y)]);
+  const std::uint16_t* const ranges = ranges_.data();
+  for (int x = 0; x < cols_; ++x) {
+    std::uint16_t* near = nearest.data() + static_cast<std::size_t>(x) * ext;
+    std::uint8_t* side = sides.data() + static_cast<std::size_t>(x) * ext;
+    for (const auto& [y, slot] : stored) {
+      const std::uint16_t cm = ranges[static_cast<std::size_t>(slot) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(x)];
+      if (cm == 0) continue;
+      const std::uint16_t saturated = std::min(cm, kNearestMask);
+      // Window row y - wr + k (stored at y + k) holds row y: at or below it for k >= wr, at or above for k <= wr.
+      for (int k = 0; k <= 2 * wr; ++k) near[y + k] = std::min(near[y + k], saturated);
+      for (int k = 0; k < wr; ++k) side[y + k] |= kAbove;
+      side[y + wr] |= kBelow | kAbove;
+      for (int k = wr + 1; k <= 2 * wr; ++k) side[y + k] |= kBelow;
+    }
+  }
+  window_width_ = std::min(circle_cols_, cols_ + 2 * wc);
+  windows_.assign(ext * static_cast<std::size_t>(window_width_), 0);
+  constexpr std::uint8_t kLeft = 4, kRight = 8, kAll = kBelow | kAbove | kLeft | kRight;
+  // Raw pointers: stores through std::uint8_t* may alias anything, so the vectors' own pointers
+  // would be reloaded in every iteration.
+  std::vector<std::uint16_t> window_near(ext);
+  std::vector<std::uint8_t> window_sides(ext);
+  std::uint16_t* const wn = window_near.data();
+  std::uint8_t* const ws = window_sides.data();
+  const std::uint16_t* const column_near = nearest.data();
+  const std::uint8_t* const column_sides = sides.data();
+  for (int j = 0; j < window_width_; ++j) {
+    const int arc_col = j < cols_ + wc ? j : circle_cols_ - wc + (j - cols_ - wc);
+    std::fill(wn, wn + ext, kNone);
+    std::fill(ws, ws + ext, 0);
+    for (int dc = -wc; dc <= wc; ++dc) {  // the columns the window reaches, one at a time
+      const int x = (arc_col + dc + 2 * circle_cols_) % circle_cols_;
+      if (x >= cols_) continue;
+      const std::uint16_t* near = column_near + static_cast<std::size_t>(x) * ext;
+      const std::uint8_t* side = column_sides + static_cast<std::size_t>(x) * ext;
+      const auto lr = static_cast<std::uint8_t>((dc <= 0 ? kLeft : 0) | (dc >= 0 ? kRight : 0));
+      for (std::size_t at = 0; at < ext; ++at) {
+        wn[at] = std::min(wn[at], near[at]);
+        ws[at] |= static_cast<std::uint8_t>((near[at] != kNone) * (lr | side[at]));
+      }
+    }
+    std::uint16_t* out = windows_.data() + static_cast<std::size_t>(j) * ext;
+    for (std::size_t at = 0; at < ext; ++at)
+      out[at] = static_cast<std::uint16_t>((wn[at] == kNone ? 0 : wn[at]) | (ws[at] == kAll ? kSurrounded : 0));
+  }
 }
 
 int RangeImage::colOf(const Eigen::Vector3d& p) const {
@@ -108,44 +181,34 @@ void RangeImage::pixelOf(const Eigen::Vector3d& p, int* col, int* row) const {
 Visibility RangeImage::classify(const Eigen::Vector3d& p) const {
   if (ranges_.empty()) return Visibility::kUnknown;
   const double r = p.norm();
-  if (!(r >= cfg_.min_range_m) || r > cfg_.max_range_m) return Visibility::kUnknown;
+  if (!(r >= cfg_.min_range_m) || r > std::min(cfg_.max_range_m, kMaxJudgedRangeM)) return Visibility::kUnknown;
   if (narrow_arc_ && (arc_from_x_ * p.y() - arc_from_y_ * p.x() < 0 || p.x() * arc_to_y_ - p.y() * arc_to_x_ < 0))
     return Visibility::kUnknown;  // beyond the arc
-  // Most points asked about lie outside a solid-state LiDAR's arc (turned away above) or rows: the
-  // window is placed row first, then column by column (x once per column), and left as soon as it
-  // is empty.
+  // Most points asked about lie outside a solid-state LiDAR's arc (turned away above) or rows.
+  const int wr = cfg_.window_rows;
   const int row = rowOf(elevationOf(p), inv_res_) - row0_;  // a row just outside still sees measured rows
-  if (row + cfg_.window_rows < 0 || row - cfg_.window_rows >= rows_) return Visibility::kUnknown;
-  const int col = colOf(p);
-  const double margin = cfg_.margin_m + cfg_.margin_fraction * r;
-  const double hit_margin = cfg_.hit_margin_m + cfg_.hit_margin_fraction * r;
-  const int y_lo = std::max(0, row - cfg_.window_rows), y_hi = std::min(rows_ - 1, row + cfg_.window_rows);
-  double nearest = std::numeric_limits<double>::infinity();
-  bool hit = false, below = false, above = false, left = false, right = false;
-  for (int dc = -cfg_.window_cols; dc <= cfg_.window_cols; ++dc) {
-    const int x = (col + dc - col0_ + 2 * circle_cols_) % circle_cols_;
-    if (x >= cols_) continue;
-    for (int y = y_lo; y <= y_hi; ++y) {
+  if (row + wr < 0 || row - wr >= rows_) return Visibility::kUnknown;
+  const int arc_col = (colOf(p) - col0_ + circle_cols_) % circle_cols_;
+  const int j = windowColumn(arc_col);
+  if (j < 0) return Visibility::kUnknown;
+  const std::uint16_t window =
+      windows_[static_cast<std::size_t>(j) * static_cast<std::size_t>(rows_ + 2 * wr) + static_cast<std::size_t>(row + wr)];
+  if ((window & kNearestMask) == 0) return Visibility::kUnknown;
+  const double nearest = 0.01 * (window & kNearestMask);
+  if ((window & kSurrounded) && r < nearest - (cfg_.margin_m + cfg_.margin_fraction * r)) return Visibility::kFree;
+  // Seen ON: a return at the point's range in its own pixel or the ones just above and below. The
+  // rest of the window does not count: at grazing incidence it reaches a wall or the floor at every
+  // range near the point's.
+  if (arc_col < cols_) {
+    const double hit_margin = cfg_.hit_margin_m + cfg_.hit_margin_fraction * r;
+    const int reach = std::min(1, wr);
+    for (int y = std::max(0, row - reach); y <= std::min(rows_ - 1, row + reach); ++y) {
       const int slot = slot_of_row_[static_cast<std::size_t>(y)];
       if (slot < 0) continue;
-      const std::uint16_t cell = ranges_[static_cast<std::size_t>(slot) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(x)];
-      if (cell == 0) continue;
-      const int dr = y - row;
-      const double m = 0.01 * cell;
-      nearest = std::min(nearest, m);
-      // Seen ON: a return at the point's range in its own pixel or the ones just above and below.
-      // The rest of the window does not count: at grazing incidence it reaches a wall or the floor
-      // at every range near the point's.
-      hit = hit || (dc == 0 && std::abs(dr) <= 1 && std::abs(m - r) <= hit_margin);
-      below = below || dr <= 0;
-      above = above || dr >= 0;
-      left = left || dc <= 0;
-      right = right || dc >= 0;
+      const std::uint16_t cell = ranges_[static_cast<std::size_t>(slot) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(arc_col)];
+      if (cell != 0 && std::abs(0.01 * cell - r) <= hit_margin) return Visibility::kHit;
     }
   }
-  if (!std::isfinite(nearest)) return Visibility::kUnknown;
-  if (below && above && left && right && r < nearest - margin) return Visibility::kFree;
-  if (hit) return Visibility::kHit;
   return nearest < r ? Visibility::kOccluded : Visibility::kUnknown;
 }
 

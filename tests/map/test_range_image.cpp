@@ -102,8 +102,13 @@ TEST(RangeImage, ASolidStateViewKeepsOnlyItsArcAndJudgesAsTheFullCircleWould) {
   const Eigen::Matrix3f turn = Eigen::AngleAxisf(static_cast<float>(M_PI), Eigen::Vector3f::UnitZ()).toRotationMatrix();
   for (Point& p : behind) p.xyz = turn * p.xyz;
   const RangeImage front(ahead, RangeImageConfig{}), back(behind, RangeImageConfig{});
-  const double res = RangeImageConfig{}.resolution_deg;
-  const auto full_turn_bytes = static_cast<std::size_t>(360.0 / res * (20.0 / res + 1) * sizeof(std::uint16_t));
+  const RangeImageConfig cfg;
+  const double res = cfg.resolution_deg;
+  // Over a full turn, the 20 deg of rows (plus the windows' reach beyond them) twice: the returns
+  // and the window summaries.
+  const double rows = 20.0 / res + 1;
+  const auto full_turn_bytes =
+      static_cast<std::size_t>(360.0 / res * (2 * rows + 2 * cfg.window_rows) * sizeof(std::uint16_t));
   EXPECT_LT(front.memoryBytes(), full_turn_bytes / 4);  // the wall's 60 of 360 deg, and a pixel or so
   EXPECT_EQ(front.memoryBytes(), back.memoryBytes());
   int free = 0;
@@ -135,6 +140,32 @@ TEST(RangeImage, ANarrowViewAnswersAsTheSameViewWithAReturnBehindWould) {
       }
   EXPECT_GT(judged, 1000);   // the wall's arc and its edges
   EXPECT_GT(unknown, 5000);  // the rest of the turn
+}
+
+TEST(RangeImage, WindowsReachAPixelBeyondEitherEndOfTheArcAcrossTheSeam) {
+  // Returns at 10 m all round but for a 20 deg gap behind (pixel columns 20 .. 700 of 720, each
+  // return at its pixel's centre): a query one pixel beyond either end still has a return in its
+  // window (the one before column 20 lies across the -180 / +180 deg seam), two pixels beyond none.
+  const double res = RangeImageConfig{}.resolution_deg;
+  const auto azimuthOfColumn = [res](int col) { return (col + 0.5) * res - 180.0; };
+  std::vector<Point> pts;
+  for (int col = 20; col <= 700; ++col)
+    for (int row = -20; row < 20; ++row) pts.push_back(at(10.0, azimuthOfColumn(col), (row + 0.5) * res));
+  const RangeImage image(pts, RangeImageConfig{});
+  EXPECT_EQ(image.classify(dir(13.0, azimuthOfColumn(701), 0.25)), Visibility::kOccluded);
+  EXPECT_EQ(image.classify(dir(13.0, azimuthOfColumn(19), 0.25)), Visibility::kOccluded);
+  EXPECT_EQ(image.classify(dir(10.0, azimuthOfColumn(700), 0.25)), Visibility::kHit);
+  EXPECT_EQ(image.classify(dir(13.0, azimuthOfColumn(702), 0.25)), Visibility::kUnknown);
+  EXPECT_EQ(image.classify(dir(13.0, azimuthOfColumn(18), 0.25)), Visibility::kUnknown);
+  // Free needs returns on both sides: not one pixel beyond the end, but one pixel inside it.
+  EXPECT_EQ(image.classify(dir(5.0, azimuthOfColumn(701), 0.25)), Visibility::kUnknown);
+  EXPECT_EQ(image.classify(dir(5.0, azimuthOfColumn(699), 0.25)), Visibility::kFree);
+  EXPECT_EQ(image.classify(dir(5.0, azimuthOfColumn(21), 0.25)), Visibility::kFree);
+  // Rows likewise: a query up to window_rows pixels above the top row is judged, not free.
+  const int above = RangeImageConfig{}.window_rows;
+  EXPECT_EQ(image.classify(dir(13.0, 0.0, (19 + above + 0.5) * res)), Visibility::kOccluded);
+  EXPECT_EQ(image.classify(dir(13.0, 0.0, (19 + above + 1.5) * res)), Visibility::kUnknown);
+  EXPECT_EQ(image.classify(dir(5.0, 0.0, (19 + 1.5) * res)), Visibility::kUnknown);
 }
 
 }  // namespace mmlio::map

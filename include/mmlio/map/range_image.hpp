@@ -28,8 +28,13 @@ struct RangeImageConfig {
   double hit_margin_fraction = 0.01;  // ... plus this fraction (tighter than free: a point 10-20 cm in
                                       // front of a wall is neither, not "seen on" by every view of the wall)
   double min_range_m = 0.5;     // nearer points are never judged (self returns, blind zone) ...
-  double max_range_m = 20.0;    // ... nor farther ones (the margin there exceeds a person's depth)
+  double max_range_m = 20.0;    // ... nor farther ones (the margin there exceeds a person's depth;
+                                // never beyond kMaxJudgedRangeM)
 };
+
+/// Farthest point any image judges: window summaries hold ranges up to 327.67 m (15 bits of cm),
+/// beyond any such point plus its free-space margin.
+constexpr double kMaxJudgedRangeM = 250.0;
 
 enum class Visibility : std::uint8_t { kUnknown, kFree, kHit, kOccluded };
 
@@ -42,13 +47,18 @@ class RangeImage {
   Visibility classify(const Eigen::Vector3d& p_sensor) const;
   bool empty() const { return ranges_.empty(); }
   std::size_t memoryBytes() const {
-    return ranges_.size() * sizeof(ranges_[0]) + slot_of_row_.size() * sizeof(slot_of_row_[0]);
+    return ranges_.size() * sizeof(ranges_[0]) + slot_of_row_.size() * sizeof(slot_of_row_[0]) +
+           windows_.size() * sizeof(windows_[0]);
   }
 
  private:
   // For a finite, non-zero p; col on the full circle, row relative to row0_ (may lie outside the image).
   void pixelOf(const Eigen::Vector3d& p, int* col, int* row) const;
   int colOf(const Eigen::Vector3d& p) const;  // pixelOf's column alone
+  /// Index into a row of windows_ for a column counted from col0_ around the circle, -1 if no
+  /// window around it reaches a stored column.
+  int windowColumn(int arc_col) const;
+  void summariseWindows();
 
   RangeImageConfig cfg_;
   double inv_res_ = 1.0;
@@ -66,6 +76,15 @@ class RangeImage {
   // Stored rows x cols_, nearest return in cm (0 = none): half the memory of floats, far below the
   // margins (keyframes keep their images for the map's ghost removal).
   std::vector<std::uint16_t> ranges_;
+  // What classify needs of the window around every pixel, computed once per image: a keyframe's
+  // image is asked about every local-map point near it, and a sweep's about the features of the
+  // eight sweeps after it. Column by column (as windowColumn numbers them), rows -window_rows ..
+  // rows_ + window_rows - 1 (relative to row0_). Per pixel: the nearest return in the window in cm (0 = none,
+  // saturating at 32767) and, in the top bit, whether returns surround it (above and below, left
+  // and right).
+  static constexpr std::uint16_t kSurrounded = 0x8000, kNearestMask = 0x7fff;
+  int window_width_ = 0;
+  std::vector<std::uint16_t> windows_;
 };
 
 }  // namespace mmlio::map
