@@ -258,28 +258,43 @@ void MappingBackend::removeGhosts(std::size_t submap) {
     }
   }
   if (eyes.empty()) return;
+  // Eyes come grouped by keyframe (a keyframe's LiDARs together): one vote per group.
+  struct Group {
+    std::size_t begin, end, keyframe;
+  };
+  std::vector<Group> groups;
+  for (std::size_t e = 0; e < eyes.size(); ++e)
+    if (groups.empty() || eyes[e].keyframe != groups.back().keyframe) groups.push_back({e, e + 1, eyes[e].keyframe});
+    else groups.back().end = e + 1;
   const Eigen::Isometry3d T_world_keyframe = graph_.pose(static_cast<int>(submap));
   const double r2 = cfg_.ghost_range_m * cfg_.ghost_range_m;
   for (auto& [lidar, points] : submaps_[submap]) {
     std::vector<std::uint8_t> ghost(points.size(), 0), judged(points.size(), 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 512), [&](const tbb::blocked_range<std::size_t>& r) {
+      // A group's vote on the current point, once asked: the second, full round reuses the first's.
+      enum Vote : std::uint8_t { kNotAsked, kNone, kFree, kHit };
+      std::vector<std::uint8_t> votes(groups.size());
       for (std::size_t i = r.begin(); i < r.end(); ++i) {
         const Eigen::Vector3d p = T_world_keyframe * points[i].xyz.cast<double>();
         if (!nearMoved(p)) continue;
+        std::fill(votes.begin(), votes.end(), kNotAsked);
+        const auto voteOf = [&](const Group& g) {
+          bool view_hit = false;
+          for (std::size_t e = g.begin; e < g.end; ++e) {
+            if ((p - eyes[e].origin).squaredNorm() > r2) continue;
+            const map::Visibility v = eyes[e].image->classify(eyes[e].T_sensor_world * p);
+            if (v == map::Visibility::kFree) return kFree;  // seen through by one of them settles it
+            view_hit = view_hit || v == map::Visibility::kHit;
+          }
+          return view_hit ? kHit : kNone;
+        };
         // Votes of the keyframes whose index modulo `stride` is `phase` (stride 1: all of them).
         const auto vote = [&](std::size_t stride, int* free, int* hit) {
-          for (std::size_t e = 0; e < eyes.size();) {
-            bool view_free = false, view_hit = false;
-            const std::size_t k = eyes[e].keyframe;
-            const bool asked = k % stride == submap % stride;
-            for (; e < eyes.size() && eyes[e].keyframe == k; ++e) {
-              if (!asked || (p - eyes[e].origin).squaredNorm() > r2) continue;
-              const map::Visibility v = eyes[e].image->classify(eyes[e].T_sensor_world * p);
-              view_free = view_free || v == map::Visibility::kFree;
-              view_hit = view_hit || v == map::Visibility::kHit;
-            }
-            *free += view_free;
-            *hit += view_hit && !view_free;
+          for (std::size_t g = 0; g < groups.size(); ++g) {
+            if (groups[g].keyframe % stride != submap % stride) continue;
+            if (votes[g] == kNotAsked) votes[g] = voteOf(groups[g]);
+            *free += votes[g] == kFree;
+            *hit += votes[g] == kHit;
           }
         };
         int free = 0, hit = 0;
