@@ -55,8 +55,8 @@ class RangeImage {
   // For a finite, non-zero p; col on the full circle, row relative to row0_ (may lie outside the image).
   void pixelOf(const Eigen::Vector3d& p, int* col, int* row) const;
   int colOf(const Eigen::Vector3d& p) const;  // pixelOf's column alone
-  /// Index into a row of windows_ for a column counted from col0_ around the circle, -1 if no
-  /// window around it reaches a stored column.
+  /// The column of windows_ for a column counted from col0_ around the circle, -1 if no window
+  /// around it reaches a stored column.
   int windowColumn(int arc_col) const;
   void summariseWindows();
 
@@ -78,10 +78,10 @@ class RangeImage {
   std::vector<std::uint16_t> ranges_;
   // What classify needs of the window around every pixel, computed once per image: a keyframe's
   // image is asked about every local-map point near it, and a sweep's about the features of the
-  // eight sweeps after it. Column by column (as windowColumn numbers them), rows -window_rows ..
-  // rows_ + window_rows - 1 (relative to row0_). Per pixel: the nearest return in the window in cm (0 = none,
-  // saturating at 32767) and, in the top bit, whether returns surround it (above and below, left
-  // and right).
+  // sweeps after it. Column by column (as windowColumn numbers them), rows -window_rows ..
+  // rows_ + window_rows - 1 (relative to row0_). Per pixel: the nearest return in the window in
+  // cm (0 = none, saturating at 32767) and, in the top bit, whether returns surround it (above
+  // and below, left and right).
   static constexpr std::uint16_t kSurrounded = 0x8000, kNearestMask = 0x7fff;
   int window_width_ = 0;
   std::vector<std::uint16_t> windows_;
