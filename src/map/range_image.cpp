@@ -89,8 +89,7 @@ RangeImage::RangeImage(const std::vector<Point>& points, const RangeImageConfig&
   ranges_.assign(static_cast<std::size_t>(stored) * static_cast<std::size_t>(cols_), 0);
   for (const Cell& c : cells) {
     const int x = (c.col - col0_ + circle_cols_) % circle_cols_;
-    const auto slot = static_cast<std::size_t>(slot_of_row_[static_cast<std::size_t>(c.row - lo)]);
-    std::uint16_t& cell = ranges_[slot * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(x)];
+    std::uint16_t& cell = ranges_[rangeIndex(slot_of_row_[static_cast<std::size_t>(c.row - lo)], x)];
     if (cell == 0 || c.cm < cell) cell = c.cm;
   }
   summariseWindows();
@@ -121,12 +120,11 @@ void RangeImage::summariseWindows() {
   stored.clear();
   for (int y = 0; y < rows_; ++y)
     if (slot_of_row_[static_cast<std::size_t>(y)] >= 0) stored.emplace_back(y, slot_of_row_[static_cast<std::size_t>(y)]);
-  const std::uint16_t* const ranges = ranges_.data();
   for (int x = 0; x < cols_; ++x) {
     std::uint16_t* near = nearest.data() + static_cast<std::size_t>(x) * ext;
     std::uint8_t* side = sides.data() + static_cast<std::size_t>(x) * ext;
     for (const auto& [y, slot] : stored) {
-      const std::uint16_t cm = ranges[static_cast<std::size_t>(slot) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(x)];
+      const std::uint16_t cm = ranges_[rangeIndex(slot, x)];
       if (cm == 0) continue;
       const std::uint16_t saturated = std::min(cm, kNearestMask);
       // Window row y - wr + k (stored at y + k) holds row y: at or below it for k >= wr, at or above for k <= wr.
@@ -205,7 +203,7 @@ Visibility RangeImage::classify(const Eigen::Vector3d& p) const {
     for (int y = std::max(0, row - reach); y <= std::min(rows_ - 1, row + reach); ++y) {
       const int slot = slot_of_row_[static_cast<std::size_t>(y)];
       if (slot < 0) continue;
-      const std::uint16_t cell = ranges_[static_cast<std::size_t>(slot) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(arc_col)];
+      const std::uint16_t cell = ranges_[rangeIndex(slot, arc_col)];
       if (cell != 0 && std::abs(0.01 * cell - r) <= hit_margin) return Visibility::kHit;
     }
   }

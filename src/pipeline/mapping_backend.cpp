@@ -244,28 +244,25 @@ void MappingBackend::removeGhosts(std::size_t submap) {
     const map::RangeImage* image;
     Eigen::Isometry3d T_sensor_world;
     Eigen::Vector3d origin;
-    std::size_t keyframe;
+  };
+  struct Group {  // a keyframe's eyes: eyes[begin, end)
+    std::size_t begin, end, keyframe;
   };
   const std::size_t reach = static_cast<std::size_t>(std::max(0, cfg_.ghost_keyframes));
   std::vector<Eye> eyes;
+  std::vector<Group> groups;
   for (auto it = views_.lower_bound(submap > reach ? submap - reach : 0);
        it != views_.end() && it->first <= submap + reach; ++it) {
     if (!it->second || static_cast<int>(it->first) >= static_cast<int>(graph_.size())) continue;
     const Eigen::Isometry3d T_world_body = graph_.pose(static_cast<int>(it->first));
+    const std::size_t begin = eyes.size();
     for (const estimator::SensorView& s : it->second->sensors) {
       const Eigen::Isometry3d T_world_sensor = T_world_body * s.T_body_sensor;
-      eyes.push_back({&s.image, T_world_sensor.inverse(), T_world_sensor.translation(), it->first});
+      eyes.push_back({&s.image, T_world_sensor.inverse(), T_world_sensor.translation()});
     }
+    if (eyes.size() > begin) groups.push_back({begin, eyes.size(), it->first});
   }
   if (eyes.empty()) return;
-  // Eyes come grouped by keyframe (a keyframe's LiDARs together): one vote per group.
-  struct Group {
-    std::size_t begin, end, keyframe;
-  };
-  std::vector<Group> groups;
-  for (std::size_t e = 0; e < eyes.size(); ++e)
-    if (groups.empty() || eyes[e].keyframe != groups.back().keyframe) groups.push_back({e, e + 1, eyes[e].keyframe});
-    else groups.back().end = e + 1;
   const Eigen::Isometry3d T_world_keyframe = graph_.pose(static_cast<int>(submap));
   const double r2 = cfg_.ghost_range_m * cfg_.ghost_range_m;
   for (auto& [lidar, points] : submaps_[submap]) {

@@ -58,6 +58,10 @@ class RangeImage {
   /// The column of windows_ for a column counted from col0_ around the circle, -1 if no window
   /// around it reaches a stored column.
   int windowColumn(int arc_col) const;
+  /// Where stored row `slot`'s pixel in column x (counted from col0_) lies in ranges_.
+  std::size_t rangeIndex(int slot, int x) const {
+    return static_cast<std::size_t>(slot) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(x);
+  }
   void summariseWindows();
 
   RangeImageConfig cfg_;
