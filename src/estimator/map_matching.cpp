@@ -1,11 +1,11 @@
 #include "mmlio/estimator/map_matching.hpp"
 
-#include <cmath>
-
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cmath>
 
 #include "mmlio/core/so3.hpp"
 #include "mmlio/estimator/lidar_factors.hpp"
@@ -86,43 +86,38 @@ MapMatchesFactor::MapMatchesFactor(const std::vector<MapMatch>& matches, double 
       edges_.push_back({m.p_body, m.a, weight * (Eigen::Matrix3d::Identity() - u * u.transpose())});
     }
   }
-  set_num_residuals(static_cast<int>(planes_.size() + 3 * edges_.size()));
+  set_num_residuals(kReducedRows + 1);
   mutable_parameter_block_sizes()->push_back(7);
 }
 
-bool MapMatchesFactor::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
-  const Eigen::Map<const Eigen::Vector3d> t(parameters[0]);
-  const Eigen::Matrix3d R = Eigen::Map<const Eigen::Quaterniond>(parameters[0] + 3).normalized().toRotationMatrix();
-  double* J = jacobians ? jacobians[0] : nullptr;
+MapMatchesFactor::NormalEquations MapMatchesFactor::normalEquations(const double* pose, bool with_jacobian) const {
+  const Eigen::Map<const Eigen::Vector3d> t(pose);
+  const Eigen::Matrix3d R = Eigen::Map<const Eigen::Quaterniond>(pose + 3).normalized().toRotationMatrix();
   const double h = huber_;
-  for (std::size_t i = 0; i < planes_.size(); ++i) {
-    const Plane& m = planes_[i];
+  NormalEquations ne;
+  for (const Plane& m : planes_) {
     const Eigen::Vector3d Rp = R * m.p_body;
-    const double r = m.normal.dot(Rp + t) + m.d;
+    double r = m.normal.dot(Rp + t) + m.d;
     // Beyond the Huber scale: r' = sign(r) sqrt(2 h |r| - h^2), dr'/dr = h / |r'|.
     double scale = 1.0;
     if (h > 0.0 && std::abs(r) > h) {
       const double f = std::sqrt(2.0 * h * std::abs(r) - h * h);
-      residuals[i] = std::copysign(f, r);
       scale = h / f;
-    } else {
-      residuals[i] = r;
+      r = std::copysign(f, r);
     }
-    if (J) {
-      // Right perturbation q <- q Exp(dtheta): d(R p) = -R [p]x dtheta, so d(n . R p) = (p x R^T n) . dtheta.
-      Eigen::Map<Eigen::Matrix<double, 1, 7>> row(J + 7 * i);
-      row.head<3>() = scale * m.normal;
-      row.segment<3>(3) = scale * (m.p_body.cross(R.transpose() * m.normal));
-      row(6) = 0.0;
-    }
+    ne.cost += r * r;
+    if (!with_jacobian) continue;
+    // Right perturbation q <- q Exp(dtheta): d(R p) = -R [p]x dtheta, so d(n . R p) = (p x R^T n) . dtheta.
+    Eigen::Matrix<double, 6, 1> j;
+    j.head<3>() = scale * m.normal;
+    j.tail<3>() = scale * (m.p_body.cross(R.transpose() * m.normal));
+    ne.JtJ.noalias() += j * j.transpose();
+    ne.Jtr += r * j;
   }
-  const std::size_t base = planes_.size();
-  for (std::size_t k = 0; k < edges_.size(); ++k) {
-    const Edge& m = edges_[k];
-    Eigen::Map<Eigen::Vector3d> r(residuals + base + 3 * k);
-    r = m.perp * (R * m.p_body + t - m.line_point);
+  for (const Edge& m : edges_) {
+    Eigen::Vector3d r = m.perp * (R * m.p_body + t - m.line_point);
     Eigen::Matrix<double, 3, 6> Jr;
-    if (J) {
+    if (with_jacobian) {
       Jr.leftCols<3>() = m.perp;
       Jr.rightCols<3>() = -m.perp * R * so3::hat(m.p_body);
     }
@@ -131,15 +126,42 @@ bool MapMatchesFactor::Evaluate(double const* const* parameters, double* residua
       // r' = g r with g = f / n, f = sqrt(2 h n - h^2): dr' = g dr + r (g' / n) r^T dr.
       const double f = std::sqrt(2.0 * h * n - h * h);
       const double g = f / n, c = (h / f) / (n * n) - f / (n * n * n);
-      if (J) Jr = g * Jr + c * r * (r.transpose() * Jr);
+      if (with_jacobian) Jr = g * Jr + c * r * (r.transpose() * Jr);
       r *= g;
     }
-    if (J) {
-      Eigen::Map<Eigen::Matrix<double, 3, 7, Eigen::RowMajor>> rows(J + 7 * (base + 3 * k));
-      rows.leftCols<6>() = Jr;
-      rows.col(6).setZero();
-    }
+    ne.cost += r.squaredNorm();
+    if (!with_jacobian) continue;
+    ne.JtJ.noalias() += Jr.transpose() * Jr;
+    ne.Jtr.noalias() += Jr.transpose() * r;
   }
+  return ne;
+}
+
+bool MapMatchesFactor::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
+  double* J = jacobians ? jacobians[0] : nullptr;
+  const NormalEquations ne = normalEquations(parameters[0], J != nullptr);
+  Eigen::Map<Eigen::Matrix<double, kReducedRows + 1, 1>> r(residuals);
+  r.setZero();
+  if (!J) {
+    r(kReducedRows) = std::sqrt(ne.cost);  // only the cost is asked for
+    return true;
+  }
+  Eigen::Map<Eigen::Matrix<double, kReducedRows + 1, 7, Eigen::RowMajor>> rows(J);
+  rows.setZero();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(ne.JtJ);
+  const double largest = std::max(es.eigenvalues().maxCoeff(), 0.0);
+  double reduced_cost = 0.0;
+  for (int k = 0; k < kReducedRows; ++k) {
+    // Directions no match constrains (zero eigenvalues) have no gradient either: their rows stay 0.
+    const double d = es.eigenvalues()(k);
+    if (!(d > kRankTolerance * largest)) continue;
+    const double s = std::sqrt(d);
+    const Eigen::Matrix<double, 6, 1> v = es.eigenvectors().col(k);
+    rows.block<1, 6>(k, 0) = s * v.transpose();
+    r(k) = v.dot(ne.Jtr) / s;
+    reduced_cost += r(k) * r(k);
+  }
+  r(kReducedRows) = std::sqrt(std::max(ne.cost - reduced_cost, 0.0));
   return true;
 }
 

@@ -3,6 +3,7 @@
 #include <ceres/ceres.h>
 #include <gtest/gtest.h>
 
+#include <Eigen/LU>
 #include <memory>
 #include <random>
 
@@ -159,44 +160,126 @@ std::vector<MapMatch> mixedMatches(const Pose& x) {
   return matches;
 }
 
-TEST(MapMatchesFactor, CostAndGradientAreThoseOfOneHuberRobustResidualPerMatch) {
+/// One match's residual, whitened and made Huber-robust as r sqrt(rho(|r|^2)) / |r| (huber <= 0: as is).
+Eigen::VectorXd robustResidual(const MapMatch& m, double weight, double huber, const Pose& x) {
+  const std::unique_ptr<ceres::CostFunction> one(mapMatchCost(m, weight));
+  Eigen::VectorXd r(one->num_residuals());
+  const double* params[] = {x.data()};
+  one->Evaluate(params, r.data(), nullptr);
+  if (huber <= 0.0) return r;
+  const ceres::HuberLoss loss(huber);
+  double rho[3];
+  loss.Evaluate(r.squaredNorm(), rho);
+  return r.norm() > 0.0 ? Eigen::VectorXd(r * std::sqrt(rho[0]) / r.norm()) : r;
+}
+
+/// Cost, gradient and Gauss-Newton matrix of the matches stacked one robust residual each, the
+/// Jacobians by central differences in the tangent space.
+struct Stacked {
+  double cost = 0.0;
+  Eigen::Matrix<double, 6, 1> gradient = Eigen::Matrix<double, 6, 1>::Zero();
+  Eigen::Matrix<double, 6, 6> gauss_newton = Eigen::Matrix<double, 6, 6>::Zero();
+};
+Stacked stackedMatches(const std::vector<MapMatch>& matches, double weight, double huber, const Pose& x) {
+  PoseManifold manifold;
+  Stacked s;
+  for (const MapMatch& m : matches) {
+    const Eigen::VectorXd r = robustResidual(m, weight, huber, x);
+    Eigen::MatrixXd J(r.size(), 6);
+    for (int k = 0; k < 6; ++k) {
+      Eigen::Matrix<double, 6, 1> d = Eigen::Matrix<double, 6, 1>::Zero();
+      Pose xp, xm;
+      d[k] = 1e-6;
+      manifold.Plus(x.data(), d.data(), xp.data());
+      d[k] = -1e-6;
+      manifold.Plus(x.data(), d.data(), xm.data());
+      J.col(k) = (robustResidual(m, weight, huber, xp) - robustResidual(m, weight, huber, xm)) / 2e-6;
+    }
+    s.cost += r.squaredNorm();
+    s.gradient += J.transpose() * r;
+    s.gauss_newton += J.transpose() * J;
+  }
+  return s;
+}
+
+struct Evaluation {
+  Eigen::VectorXd r;
+  Eigen::Matrix<double, Eigen::Dynamic, 7, Eigen::RowMajor> J;
+};
+Evaluation evaluateWithJacobian(const ceres::CostFunction& cost, const Pose& x) {
+  Evaluation e{Eigen::VectorXd(cost.num_residuals()), {cost.num_residuals(), 7}};
+  const double* params[] = {x.data()};
+  double* jac[] = {e.J.data()};
+  EXPECT_TRUE(cost.Evaluate(params, e.r.data(), jac));
+  return e;
+}
+
+double costOnly(const ceres::CostFunction& cost, const Pose& x) {
+  Eigen::VectorXd r(cost.num_residuals());
+  const double* params[] = {x.data()};
+  EXPECT_TRUE(cost.Evaluate(params, r.data(), nullptr));
+  return r.squaredNorm();
+}
+
+// Levenberg-Marquardt sees only cost, gradient J^T r and J^T J: the reduced block must give the
+// stacked matches' three, with and without the Jacobian asked for.
+void expectSameAsStacked(const std::vector<MapMatch>& matches, double weight, double huber, const Pose& x) {
+  const MapMatchesFactor batched(matches, weight, huber);
+  const Stacked s = stackedMatches(matches, weight, huber, x);
+  const Evaluation e = evaluateWithJacobian(batched, x);
+  EXPECT_EQ(e.r.size(), 7);
+  EXPECT_TRUE(e.r.allFinite() && e.J.allFinite());
+  EXPECT_EQ(e.J.col(6).norm(), 0.0);
+  EXPECT_NEAR(e.r.squaredNorm(), s.cost, 1e-9 * s.cost);
+  EXPECT_NEAR(costOnly(batched, x), s.cost, 1e-9 * s.cost);
+  EXPECT_LT((e.J.leftCols<6>().transpose() * e.r - s.gradient).norm(), 1e-6 * s.gradient.norm()) << s.gradient;
+  EXPECT_LT((e.J.leftCols<6>().transpose() * e.J.leftCols<6>() - s.gauss_newton).norm(), 1e-6 * s.gauss_newton.norm());
+}
+
+TEST(MapMatchesFactor, CostGradientAndGaussNewtonMatrixAreThoseOfOneHuberRobustResidualPerMatch) {
   const Pose x = makePose({0.1, -0.2, 0.05}, {0.02, -0.01, 0.03});
   const std::vector<MapMatch> matches = mixedMatches(x);
   const double weight = 4.0, huber = 0.5;
-  const MapMatchesFactor batched(matches, weight, huber);
-  const auto Jb = analyticJacobian(batched, x);
-  Eigen::VectorXd rb(batched.num_residuals());
-  const double* params[] = {x.data()};
-  batched.Evaluate(params, rb.data(), nullptr);
-
-  const ceres::HuberLoss loss(huber);
-  double cost = 0.0;
-  Eigen::Matrix<double, 6, 1> gradient = Eigen::Matrix<double, 6, 1>::Zero();
   int beyond = 0;
   for (const MapMatch& m : matches) {
     const std::unique_ptr<ceres::CostFunction> one(mapMatchCost(m, weight));
-    const auto J = analyticJacobian(*one, x);
     Eigen::VectorXd r(one->num_residuals());
+    const double* params[] = {x.data()};
     one->Evaluate(params, r.data(), nullptr);
-    double rho[3];
-    loss.Evaluate(r.squaredNorm(), rho);
-    cost += rho[0];
-    gradient += rho[1] * J.leftCols<6>().transpose() * r;
     beyond += r.norm() > huber;
   }
   ASSERT_GT(beyond, 5);  // the loss is exercised
   ASSERT_LT(beyond, 25);
-  EXPECT_NEAR(rb.squaredNorm(), cost, 1e-9 * cost);
-  EXPECT_LT((Jb.leftCols<6>().transpose() * rb - gradient).norm(), 1e-9 * gradient.norm());
+  expectSameAsStacked(matches, weight, huber, x);
+  expectSameAsStacked(matches, weight, 0.0, x);  // no loss
 }
 
-TEST(MapMatchesFactor, AnalyticJacobianMatchesNumericInTangentSpace) {
-  const Pose x = makePose({0.1, -0.2, 0.05}, {0.02, -0.01, 0.03});
-  const MapMatchesFactor batched(mixedMatches(x), 4.0, 0.5);
-  const auto Ja = analyticJacobian(batched, x);
-  const Eigen::MatrixXd Jn = numericTangentJacobian(batched, x);
-  EXPECT_LT((Ja.leftCols<6>() - Jn).norm(), 1e-5 * Jn.norm());
-  EXPECT_EQ(Ja.col(6).norm(), 0.0);
+TEST(MapMatchesFactor, MatchesOnOneFloorConstrainThreeDirectionsAndLeaveTheOthersAtZero) {
+  // Points on the plane z = 0 only fix z, roll and pitch: J^T J has rank 3.
+  const Pose x = makePose({0.3, 0.1, 0.04}, {0.01, -0.02, 0.5});
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> U(-3.0, 3.0);
+  std::vector<MapMatch> matches;
+  for (int i = 0; i < 40; ++i) {
+    MapMatch m;
+    m.p_body = {U(rng), U(rng), -0.04};
+    m.a = {0, 0, 1};
+    m.b = {0.0, 0, 0};
+    matches.push_back(m);
+  }
+  expectSameAsStacked(matches, 4.0, 0.5, x);
+  const Evaluation e = evaluateWithJacobian(MapMatchesFactor(matches, 4.0, 0.5), x);
+  const Eigen::Matrix<double, 6, 6> JtJ = e.J.leftCols<6>().transpose() * e.J.leftCols<6>();
+  Eigen::FullPivLU<Eigen::Matrix<double, 6, 6>> lu(JtJ);
+  lu.setThreshold(1e-9);
+  EXPECT_EQ(lu.rank(), 3);
+}
+
+TEST(MapMatchesFactor, NoMatchesCostNothing) {
+  const Pose x = makePose({0, 0, 0}, {0, 0, 0});
+  const Evaluation e = evaluateWithJacobian(MapMatchesFactor({}, 4.0, 0.5), x);
+  EXPECT_EQ(e.r.norm(), 0.0);
+  EXPECT_EQ(e.J.norm(), 0.0);
 }
 
 TEST(LidarFactors, RegistrationRecoversAKnownSixDofPerturbation) {

@@ -54,19 +54,35 @@ double matchDistance(const MapMatch& m, const Eigen::Isometry3d& T_world_body);
 /// The point-to-plane / point-to-edge residual of a match on one pose block, whitened by weight.
 ceres::CostFunction* mapMatchCost(const MapMatch& m, double weight);
 
-/// All matches of one pose as ONE residual block (1 row per plane, 3 per edge, whitened by
-/// weight), each match robust with its own Huber loss of scale huber (whitened units; <= 0: none). Ceres'
-/// per-block overhead (a call, Jacobian bookkeeping, the loss correction) cost more than the
-/// residuals themselves when a sweep has thousands of matches. The loss is applied as
+/// All matches of one pose as ONE residual block, each match whitened by weight and robust with
+/// its own Huber loss of scale huber (whitened units; <= 0: none). The loss is applied as
 /// r' = sqrt(rho(|r|^2)) r / |r|, so |r'|^2 is exactly the robust cost and the Gauss-Newton
 /// model is that of the robust cost (Ceres' own correction differs only in the curvature it
 /// gives a match beyond the Huber scale: half of it far out, the same at the scale).
+///
+/// Ceres sees the block reduced to 7 rows: with the stacked matches' Jacobian J and residuals r,
+/// J^T J = V D V^T, the rows are sqrt(D) V^T with residuals D^-1/2 V^T J^T r, and a seventh row
+/// without Jacobian carries the rest of |r|^2. Cost, gradient J^T r and Gauss-Newton matrix J^T J
+/// are those of the stacked matches, so Levenberg-Marquardt takes the same steps, but the solver
+/// no longer stores, scales and eliminates thousands of Jacobian rows per iteration (per-row
+/// solver work cost more than evaluating the matches).
 class MapMatchesFactor final : public ceres::CostFunction {
  public:
   MapMatchesFactor(const std::vector<MapMatch>& matches, double weight, double huber);
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
+  /// Cost |r|^2, gradient J^T r and J^T J of the stacked robust matches at the pose (tangent
+  /// order: translation, then rotation as a right perturbation).
+  struct NormalEquations {
+    Eigen::Matrix<double, 6, 6> JtJ = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> Jtr = Eigen::Matrix<double, 6, 1>::Zero();
+    double cost = 0.0;
+  };
+  NormalEquations normalEquations(const double* pose, bool with_jacobian) const;
+
  private:
+  static constexpr int kReducedRows = 6;
+  static constexpr double kRankTolerance = 1e-12;  // of the largest eigenvalue of J^T J
   struct Plane {
     Eigen::Vector3d p_body, normal;  // normal and d carry the weight
     double d;
