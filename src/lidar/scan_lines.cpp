@@ -40,8 +40,15 @@ void orderLine(const LidarScan& scan, bool spinning, std::vector<std::size_t>* l
     keyed.reserve(line->size());
     for (std::size_t i : *line) keyed.emplace_back(azimuthOrderKey(scan.points[i]), i);
     const auto by_key = [](const auto& a, const auto& b) { return a.first < b.first; };
-    if (std::is_sorted(keyed.begin(), keyed.end(), by_key)) return;
-    std::stable_sort(keyed.begin(), keyed.end(), by_key);
+    const auto seam = std::is_sorted_until(keyed.begin(), keyed.end(), by_key);
+    if (seam == keyed.end()) return;
+    // A sweep that starts past azimuth -pi is one turn cut at the seam: two sorted runs, the second
+    // wholly before the first. Rotating them is the stable sort's order (no key is shared across
+    // the seam), without its n log n.
+    if (std::is_sorted(seam, keyed.end(), by_key) && by_key(keyed.back(), keyed.front()))
+      std::rotate(keyed.begin(), seam, keyed.end());
+    else
+      std::stable_sort(keyed.begin(), keyed.end(), by_key);
     for (std::size_t k = 0; k < keyed.size(); ++k) (*line)[k] = keyed[k].second;
   } else {
     // Drivers send a line in time order: checking costs a pass, sorting n log n.

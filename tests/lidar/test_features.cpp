@@ -1,6 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
+#include <random>
 #include <sstream>
 
 #include "mmlio/io/pcd_io.hpp"
@@ -60,6 +63,37 @@ TEST(Features, RangeImageRowsReplaceMissingRings) {
   EXPECT_GE(e.at_edge, 56);
   EXPECT_LE(e.elsewhere, e.at_edge / 10);
   EXPECT_GT(f.planes.size(), 5000u);
+}
+
+TEST(Features, RingsAreReadInAzimuthOrderWhereverTheSweepStartsAndHoweverThePointsCome) {
+  const BoxRoom room;
+  const LidarScan scan = synth::vlp16Room(room, 0.01);
+  const auto sameFeatures = [](const FeatureCloud& a, const FeatureCloud& b) {
+    const auto same = [](const std::vector<Point>& x, const std::vector<Point>& y) {
+      if (x.size() != y.size()) return false;
+      for (std::size_t i = 0; i < x.size(); ++i)
+        if (x[i].xyz != y[i].xyz) return false;
+      return true;
+    };
+    return same(a.edges, b.edges) && same(a.planes, b.planes);
+  };
+  const FeatureCloud reference = extractFeatures(scan, LidarKind::kSpinning, 16, FeatureConfig{});
+  ASSERT_GT(reference.edges.size(), 50u);
+  for (const double start_fraction : {0.1, 0.5, 0.93}) {  // a turn cut at another azimuth: one seam per ring
+    LidarScan cut = scan;
+    const auto at = cut.points.begin() + static_cast<std::ptrdiff_t>(start_fraction * cut.points.size());
+    std::rotate(cut.points.begin(), at, cut.points.end());
+    EXPECT_TRUE(sameFeatures(extractFeatures(cut, LidarKind::kSpinning, 16, FeatureConfig{}), reference)) << start_fraction;
+  }
+  LidarScan shuffled = scan;  // e.g. dual-return packets: no seam structure at all
+  std::mt19937 rng(4);
+  std::shuffle(shuffled.points.begin(), shuffled.points.end(), rng);
+  EXPECT_TRUE(sameFeatures(extractFeatures(shuffled, LidarKind::kSpinning, 16, FeatureConfig{}), reference));
+  for (const auto& line : scanLines(shuffled, LidarKind::kSpinning, 16, FeatureConfig{}))
+    for (std::size_t k = 1; k < line.size(); ++k) {
+      const Point &a = shuffled.points[line[k - 1]], &b = shuffled.points[line[k]];
+      EXPECT_LE(std::atan2(a.xyz.y(), a.xyz.x()), std::atan2(b.xyz.y(), b.xyz.x()));
+    }
 }
 
 TEST(Features, LivoxLikeLineScanGivesCornerEdgesAndWallPlanes) {
