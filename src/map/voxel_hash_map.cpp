@@ -231,12 +231,17 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
     BrickCache bricks(*this);
     for (int r = 0; r <= max_ring; ++r) {
       for (int dx = -r; dx <= r; ++dx) {
+        // A voxel that cannot hold a point nearer than the bound is not looked up; the bound only
+        // shrinks, so a slab or row already beyond it is left whole.
         const double gx = axisGap(q.x(), c.x, dx);
+        if (gx >= bound) continue;
         for (int dy = -r; dy <= r; ++dy) {
           const double gxy = gx + axisGap(q.y(), c.y, dy);
-          for (int dz = -r; dz <= r; ++dz) {
-            if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r) continue;  // shell only
-            // A voxel that cannot hold a point nearer than the bound is not looked up.
+          if (gxy >= bound) continue;
+          // The shell of ring r only: inside a face (|dx|, |dy| < r) just its two z ends.
+          const bool face = std::abs(dx) == r || std::abs(dy) == r;
+          const int dz_step = face || r == 0 ? 1 : 2 * r;
+          for (int dz = -r; dz <= r; dz += dz_step) {
             const double gap2 = gxy + axisGap(q.z(), c.z, dz);
             if (gap2 >= bound) continue;
             const Key key{c.x + dx, c.y + dy, c.z + dz};
