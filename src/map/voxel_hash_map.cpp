@@ -228,6 +228,13 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
       const double d = offset > 0 ? face - coord : coord - face;
       return d * d;
     };
+    double inner = voxel_m_;
+    const int cell[3] = {c.x, c.y, c.z};
+    for (int a = 0; a < 3; ++a) {
+      const double lower = cell[a] * voxel_m_;
+      inner = std::min({inner, q[a] - lower, lower + voxel_m_ - q[a]});
+    }
+    inner = std::max(inner, 0.0);
     BrickCache bricks(*this);
     for (int r = 0; r <= max_ring; ++r) {
       for (int dx = -r; dx <= r; ++dx) {
@@ -252,8 +259,10 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
           }
         }
       }
-      if (r >= 1 && full()) {
-        const double covered = r * voxel_m_;
+      // Every unscanned point lies outside the cube of rings 0..r: at least r voxels plus q's
+      // distance to the nearest face of its own voxel away.
+      if (full()) {
+        const double covered = r * voxel_m_ + inner;
         if (bound <= covered * covered) break;
       }
     }
