@@ -55,6 +55,11 @@ struct FieldReader {
     return v;
   }
   double operator()(const std::uint8_t* p) const {
+    if (type == PF::FLOAT32 && !swap) {  // nearly every driver's x, y, z, intensity and time
+      float v;
+      std::memcpy(&v, p + offset, sizeof v);
+      return v;
+    }
     switch (type) {
       case PF::INT8: return raw<std::int8_t>(p);
       case PF::UINT8: return raw<std::uint8_t>(p);
