@@ -32,6 +32,27 @@ double elevationDeg(const Point& p) {
   return std::atan2(v.z(), v.head<2>().norm()) * 180.0 / M_PI;
 }
 
+/// Sorts by key as std::stable_sort would, without its n log n for the shapes one turn of a ring
+/// comes in: ascending, or descending (a clockwise spin, as Velodyne's), either cut once where the
+/// sweep started. Two runs, the second wholly before the first, are put in order by a rotation
+/// (no key is shared across the cut); a descending ring is reversed first, which keeps the stable
+/// order only where no two keys are equal, so that case asks for strictly descending runs.
+void sortRingByKey(std::vector<std::pair<double, std::size_t>>* keyed) {
+  const auto by_key = [](const auto& a, const auto& b) { return a.first < b.first; };
+  const auto cutIntoOrder = [&](const auto& precedes) {  // precedes: the runs' order relation
+    const auto cut = std::is_sorted_until(keyed->begin(), keyed->end(), precedes);
+    if (cut == keyed->end()) return true;
+    if (!std::is_sorted(cut, keyed->end(), precedes) || !by_key(keyed->back(), keyed->front())) return false;
+    std::rotate(keyed->begin(), cut, keyed->end());
+    return true;
+  };
+  if (cutIntoOrder(by_key)) return;
+  std::reverse(keyed->begin(), keyed->end());
+  if (cutIntoOrder([](const auto& a, const auto& b) { return a.first <= b.first; })) return;  // strictly
+  std::reverse(keyed->begin(), keyed->end());
+  std::stable_sort(keyed->begin(), keyed->end(), by_key);
+}
+
 // Spinning rings are ordered by azimuth (drivers' per-point times are not always monotonic along a
 // ring, e.g. dual-return packets); Livox lines by time (the scan pattern doubles back in azimuth).
 void orderLine(const LidarScan& scan, bool spinning, std::vector<std::size_t>* line) {
@@ -39,16 +60,7 @@ void orderLine(const LidarScan& scan, bool spinning, std::vector<std::size_t>* l
     std::vector<std::pair<double, std::size_t>> keyed;
     keyed.reserve(line->size());
     for (std::size_t i : *line) keyed.emplace_back(azimuthOrderKey(scan.points[i]), i);
-    const auto by_key = [](const auto& a, const auto& b) { return a.first < b.first; };
-    const auto seam = std::is_sorted_until(keyed.begin(), keyed.end(), by_key);
-    if (seam == keyed.end()) return;
-    // A sweep that starts past azimuth -pi is one turn cut at the seam: two sorted runs, the second
-    // wholly before the first. Rotating them is the stable sort's order (no key is shared across
-    // the seam), without its n log n.
-    if (std::is_sorted(seam, keyed.end(), by_key) && by_key(keyed.back(), keyed.front()))
-      std::rotate(keyed.begin(), seam, keyed.end());
-    else
-      std::stable_sort(keyed.begin(), keyed.end(), by_key);
+    sortRingByKey(&keyed);
     for (std::size_t k = 0; k < keyed.size(); ++k) (*line)[k] = keyed[k].second;
   } else {
     // Drivers send a line in time order: checking costs a pass, sorting n log n.

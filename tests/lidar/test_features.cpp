@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <random>
@@ -79,11 +80,35 @@ TEST(Features, RingsAreReadInAzimuthOrderWhereverTheSweepStartsAndHoweverThePoin
   };
   const FeatureCloud reference = extractFeatures(scan, LidarKind::kSpinning, 16, FeatureConfig{});
   ASSERT_GT(reference.edges.size(), 50u);
-  for (const double start_fraction : {0.1, 0.5, 0.93}) {  // a turn cut at another azimuth: one seam per ring
-    LidarScan cut = scan;
-    const auto at = cut.points.begin() + static_cast<std::ptrdiff_t>(start_fraction * cut.points.size());
-    std::rotate(cut.points.begin(), at, cut.points.end());
-    EXPECT_TRUE(sameFeatures(extractFeatures(cut, LidarKind::kSpinning, 16, FeatureConfig{}), reference)) << start_fraction;
+  LidarScan clockwise = scan;  // Velodyne's spin: azimuth falls along a ring
+  std::reverse(clockwise.points.begin(), clockwise.points.end());
+  for (const LidarScan* turn : std::array<const LidarScan*, 2>{&scan, &clockwise})
+    for (const double start_fraction : {0.0, 0.1, 0.5, 0.93}) {  // a turn cut at another azimuth: one seam per ring
+      LidarScan cut = *turn;
+      const auto at = cut.points.begin() + static_cast<std::ptrdiff_t>(start_fraction * cut.points.size());
+      std::rotate(cut.points.begin(), at, cut.points.end());
+      EXPECT_TRUE(sameFeatures(extractFeatures(cut, LidarKind::kSpinning, 16, FeatureConfig{}), reference))
+          << start_fraction << (turn == &clockwise ? " clockwise" : "");
+    }
+  // Dual returns: a farther return at the same azimuth right after some points, so a clockwise
+  // ring holds equal keys; each pair must stay in its order (near, then far), as a stable sort keeps it.
+  LidarScan dual = clockwise;
+  dual.points.clear();
+  std::vector<std::size_t> twins;  // index of each far return; its near one precedes it
+  for (std::size_t i = 0; i < clockwise.points.size(); ++i) {
+    dual.points.push_back(clockwise.points[i]);
+    if (i % 7 != 0) continue;
+    Point far = clockwise.points[i];
+    far.xyz *= 2.f;  // exact: the same direction bit for bit
+    twins.push_back(dual.points.size());
+    dual.points.push_back(far);
+  }
+  std::vector<long> position(dual.points.size(), -1);
+  for (const auto& line : scanLines(dual, LidarKind::kSpinning, 16, FeatureConfig{}))
+    for (std::size_t k = 0; k < line.size(); ++k) position[line[k]] = static_cast<long>(k);
+  for (const std::size_t far : twins) {
+    ASSERT_GE(position[far - 1], 0);
+    EXPECT_EQ(position[far], position[far - 1] + 1);
   }
   LidarScan shuffled = scan;  // e.g. dual-return packets: no seam structure at all
   std::mt19937 rng(4);
