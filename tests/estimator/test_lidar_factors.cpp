@@ -11,6 +11,7 @@
 #include "mmlio/estimator/lidar_factors.hpp"
 #include "mmlio/estimator/map_matching.hpp"
 #include "mmlio/estimator/pose_manifold.hpp"
+#include "synthetic_matches.hpp"
 
 namespace mmlio::estimator {
 namespace {
@@ -138,27 +139,7 @@ TEST(PointToEdgeFactor, AnalyticJacobianMatchesNumericInTangentSpace) {
 
 /// Planes and edges 0-25 cm from where pose x puts their points: at weight 4 about half of
 /// them lie beyond a Huber scale of 0.5 (whitened).
-std::vector<MapMatch> mixedMatches(const Pose& x) {
-  const Eigen::Isometry3d T = blockToPose(x.data());
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<double> U(-3.0, 3.0), offset(-0.25, 0.25);
-  std::vector<MapMatch> matches;
-  for (int i = 0; i < 30; ++i) {
-    MapMatch m;
-    m.kind = i % 3 == 2 ? MapMatch::Kind::kEdge : MapMatch::Kind::kPlane;
-    m.p_body = {U(rng), U(rng), U(rng)};
-    const Eigen::Vector3d q = T * m.p_body;
-    if (m.kind == MapMatch::Kind::kPlane) {
-      m.a = Eigen::Vector3d(U(rng), U(rng), U(rng)).normalized();
-      m.b = Eigen::Vector3d(-m.a.dot(q) + offset(rng), 0, 0);
-    } else {
-      m.a = q + Eigen::Vector3d(offset(rng), offset(rng), offset(rng));
-      m.b = Eigen::Vector3d(U(rng), U(rng), 1.0);
-    }
-    matches.push_back(m);
-  }
-  return matches;
-}
+std::vector<MapMatch> mixedMatches(const Pose& x) { return testing::randomMatches(blockToPose(x.data()), {}); }
 
 /// One match's residual, whitened and made Huber-robust as r sqrt(rho(|r|^2)) / |r| (huber <= 0: as is).
 Eigen::VectorXd robustResidual(const MapMatch& m, double weight, double huber, const Pose& x) {

@@ -25,11 +25,22 @@ namespace fs = std::filesystem;
 const Stamp kT0 = 1'700'000'000'000'000'000LL;
 constexpr double kG = 9.80665;
 
+fs::path tempDir() { return fs::temp_directory_path() / ("mmlio_test_bag_" + std::to_string(::getpid())); }
+
 std::string tempPath(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("mmlio_test_bag_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return (dir / name).string();
+  fs::create_directories(tempDir());
+  return (tempDir() / name).string();
 }
+
+/// The bags this test process wrote go when it ends (ctest runs every test as its own process).
+class RemoveTempDir : public ::testing::Environment {
+ public:
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(tempDir(), ec);
+  }
+};
+[[maybe_unused]] ::testing::Environment* const remove_temp_dir = ::testing::AddGlobalTestEnvironment(new RemoveTempDir);
 
 /// A scan of n points on a 10 m circle, ring = i % 16, time_s = i * 1 ms, intensity = i.
 LidarScan ringScan(Stamp start_ns, int n) {
