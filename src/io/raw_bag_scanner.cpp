@@ -191,11 +191,18 @@ bool indexLooksSound(const std::string& path, std::string* why) {
       };
       if (c.compression == "none") {
         // Headers only, read in place: the messages' data is the bulk of a bag (1.5 GB for the
-        // simulated hall), and this check runs before every read of it.
+        // simulated hall), and this check runs before every read of it. A record's header follows
+        // its length without a seek (a seek drops the stream's buffer): one per record, over its data.
+        std::uint64_t at = std::numeric_limits<std::uint64_t>::max();
         const auto read = [&](std::size_t offset, std::size_t len, std::uint8_t* dst) {
-          in.clear();
-          in.seekg(static_cast<std::streamoff>(c.data_offset + offset));
-          return static_cast<bool>(in.read(reinterpret_cast<char*>(dst), static_cast<std::streamsize>(len)));
+          const std::uint64_t pos = c.data_offset + offset;
+          if (pos != at) {
+            in.clear();
+            in.seekg(static_cast<std::streamoff>(pos));
+          }
+          const bool ok = static_cast<bool>(in.read(reinterpret_cast<char*>(dst), static_cast<std::streamsize>(len)));
+          at = ok ? pos + len : std::numeric_limits<std::uint64_t>::max();
+          return ok;
         };
         walkRecords(c.data_size, read, recordStart);
       } else {
