@@ -228,13 +228,13 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
       const double d = offset > 0 ? face - coord : coord - face;
       return d * d;
     };
-    double inner = voxel_m_;
+    double to_own_faces = voxel_m_;  // q's distance to the nearest face of its own voxel
     const int cell[3] = {c.x, c.y, c.z};
     for (int a = 0; a < 3; ++a) {
       const double lower = cell[a] * voxel_m_;
-      inner = std::min({inner, q[a] - lower, lower + voxel_m_ - q[a]});
+      to_own_faces = std::min({to_own_faces, q[a] - lower, lower + voxel_m_ - q[a]});
     }
-    inner = std::max(inner, 0.0);
+    to_own_faces = std::max(to_own_faces, 0.0);
     BrickCache bricks(*this);
     for (int r = 0; r <= max_ring; ++r) {
       for (int dx = -r; dx <= r; ++dx) {
@@ -245,7 +245,8 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
         for (int dy = -r; dy <= r; ++dy) {
           const double gxy = gx + axisGap(q.y(), c.y, dy);
           if (gxy >= bound) continue;
-          // The shell of ring r only: inside a face (|dx|, |dy| < r) just its two z ends.
+          // The shell of ring r only: a column (dx, dy) off the shell's sides holds just its two
+          // cells dz = -r and dz = r.
           const bool face = std::abs(dx) == r || std::abs(dy) == r;
           const int dz_step = face || r == 0 ? 1 : 2 * r;
           for (int dz = -r; dz <= r; dz += dz_step) {
@@ -262,7 +263,7 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
       // Every unscanned point lies outside the cube of rings 0..r: at least r voxels plus q's
       // distance to the nearest face of its own voxel away.
       if (full()) {
-        const double covered = r * voxel_m_ + inner;
+        const double covered = r * voxel_m_ + to_own_faces;
         if (bound <= covered * covered) break;
       }
     }
