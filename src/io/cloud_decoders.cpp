@@ -55,11 +55,7 @@ struct FieldReader {
     return v;
   }
   double operator()(const std::uint8_t* p) const {
-    if (type == PF::FLOAT32 && !swap) {  // nearly every driver's x, y, z, intensity and time
-      float v;
-      std::memcpy(&v, p + offset, sizeof v);
-      return v;
-    }
+    if (type == PF::FLOAT32 && !swap) return raw<float>(p);  // nearly every driver's x, y, z, intensity, time
     switch (type) {
       case PF::INT8: return raw<std::int8_t>(p);
       case PF::UINT8: return raw<std::uint8_t>(p);

@@ -81,17 +81,21 @@ void walkRecords(std::size_t n, Read read, F f) {
   }
 }
 
-/// walkRecords over a payload in memory; f gets a pointer to each record's data.
-template <class F>
-void forEachRecord(const std::vector<std::uint8_t>& payload, F f) {
-  const std::uint8_t* p = payload.data();
-  const auto read = [p](std::size_t offset, std::size_t len, std::uint8_t* dst) {
+/// walkRecords' reader of a payload in memory.
+auto payloadReader(const std::vector<std::uint8_t>& payload) {
+  return [p = payload.data()](std::size_t offset, std::size_t len, std::uint8_t* dst) {
     std::memcpy(dst, p + offset, len);
     return true;
   };
-  walkRecords(payload.size(), read, [&](std::size_t i, const Fields& fields, std::size_t dpos, std::uint32_t dl) {
-    f(i, fields, p + dpos, dl);
-  });
+}
+
+/// walkRecords over a payload in memory; f gets a pointer to each record's data.
+template <class F>
+void forEachRecord(const std::vector<std::uint8_t>& payload, F f) {
+  walkRecords(payload.size(), payloadReader(payload),
+              [&](std::size_t i, const Fields& fields, std::size_t dpos, std::uint32_t dl) {
+                f(i, fields, payload.data() + dpos, dl);
+              });
 }
 
 }  // namespace
@@ -212,9 +216,7 @@ bool indexLooksSound(const std::string& path, std::string* why) {
         } catch (const Error& e) {
           return fail(e.what());
         }
-        forEachRecord(payload, [&](std::size_t offset, const Fields& f, const std::uint8_t*, std::uint32_t dl) {
-          recordStart(offset, f, 0, dl);
-        });
+        walkRecords(payload.size(), payloadReader(payload), recordStart);
       }
     } else if (kind == kOpIndexData) {
       const std::uint32_t count = fieldU32(r.fields, "count");

@@ -71,6 +71,10 @@ class MapMatchesFactor final : public ceres::CostFunction {
   MapMatchesFactor(const std::vector<MapMatch>& matches, double weight, double huber);
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
+ private:
+  static constexpr int kReducedRows = 6;
+  static constexpr double kRankTolerance = 1e-12;  // of the largest eigenvalue of J^T J
+
   /// Cost |r|^2, gradient J^T r and J^T J of the stacked robust matches at the pose (tangent
   /// order: translation, then rotation as a right perturbation).
   struct NormalEquations {
@@ -79,10 +83,6 @@ class MapMatchesFactor final : public ceres::CostFunction {
     double cost = 0.0;
   };
   NormalEquations normalEquations(const double* pose, bool with_jacobian) const;
-
- private:
-  static constexpr int kReducedRows = 6;
-  static constexpr double kRankTolerance = 1e-12;  // of the largest eigenvalue of J^T J
   struct Plane {
     Eigen::Vector3d p_body, normal;  // normal and d carry the weight
     double d;
