@@ -20,11 +20,10 @@ std::vector<std::size_t> firstPerCell(const std::vector<Eigen::Vector3d>& pts, d
   for (int pass = 0; pass < 8 && max_points > 0 && cell_m > 0 && kept.size() > max_points; ++pass) {
     cell_m *= 1.05 * std::max(1.0, std::sqrt(static_cast<double>(kept.size()) / static_cast<double>(max_points)));
     const double inv = 1.0 / cell_m;
-    const auto idx = [inv](double v) { return static_cast<std::int64_t>(std::floor(v * inv)); };
     FlatKeySet cells;
     kept.clear();
     for (std::size_t i = 0; i < pts.size(); ++i)
-      if (cells.insert(packVoxelKey(idx(pts[i].x()), idx(pts[i].y()), idx(pts[i].z())))) kept.push_back(i);
+      if (cells.insert(scaledVoxelKeyOf(pts[i], inv))) kept.push_back(i);
   }
   return kept;
 }

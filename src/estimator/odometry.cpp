@@ -385,8 +385,7 @@ struct Odometry::Impl {
     // Raw points follow their feature's voxel (features are voxel centroids of the raw points).
     const double inv = 1.0 / cfg.plane_voxel_m;
     const auto key = [inv](const Eigen::Vector3d& p, int dx = 0, int dy = 0, int dz = 0) {
-      const auto idx = [inv](double v) { return static_cast<std::int64_t>(std::floor(v * inv)); };
-      return packVoxelKey(idx(p.x()) + dx, idx(p.y()) + dy, idx(p.z()) + dz);
+      return scaledVoxelKeyOf(p, inv, dx, dy, dz);
     };
     // A mover is found where part of it entered free space (its leading side); its other returns
     // lie next to those: every feature in a voxel touching a flagged one goes with them.

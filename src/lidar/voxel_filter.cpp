@@ -8,11 +8,6 @@
 namespace mmlio::lidar {
 namespace {
 
-std::uint64_t voxelKey(const Eigen::Vector3f& p, double inv_leaf) {
-  const auto idx = [&](float v) { return static_cast<std::int64_t>(std::floor(v * inv_leaf)); };
-  return packVoxelKey(idx(p.x()), idx(p.y()), idx(p.z()));
-}
-
 struct Accumulator {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   double intensity_sum = 0.0;
@@ -32,7 +27,7 @@ std::vector<Point> voxelDownsample(const std::vector<Point>& pts, double leaf_m)
   for (const Point& p : pts) {
     if (!p.xyz.allFinite()) continue;
     const auto [slot, inserted] =
-        slot_of_key.insert(voxelKey(p.xyz, inv_leaf), static_cast<std::uint32_t>(out.size()));
+        slot_of_key.insert(scaledVoxelKeyOf(p.xyz.cast<double>(), inv_leaf), static_cast<std::uint32_t>(out.size()));
     if (inserted) {
       out.push_back(p);
       acc.emplace_back();

@@ -10,7 +10,6 @@ namespace mmlio::map {
 std::vector<Eigen::Vector3d> voxelCentroids(const std::vector<Eigen::Vector3d>& pts, double leaf_m) {
   if (leaf_m <= 0) return pts;
   const double inv = 1.0 / leaf_m;
-  const auto idx = [inv](double v) { return static_cast<std::int64_t>(std::floor(v * inv)); };
   thread_local FlatKeyIndex index;  // loop checks voxelize clouds of about the same size again and again
   index.reset();
   std::vector<Eigen::Vector3d> sum;
@@ -18,7 +17,7 @@ std::vector<Eigen::Vector3d> voxelCentroids(const std::vector<Eigen::Vector3d>& 
   count.clear();
   for (const auto& p : pts) {
     const auto [slot, inserted] =
-        index.insert(packVoxelKey(idx(p.x()), idx(p.y()), idx(p.z())), static_cast<std::uint32_t>(sum.size()));
+        index.insert(scaledVoxelKeyOf(p, inv), static_cast<std::uint32_t>(sum.size()));
     if (inserted) {
       sum.push_back(p);
       count.push_back(1);

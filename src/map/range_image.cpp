@@ -4,12 +4,14 @@
 #include <cmath>
 #include <limits>
 
+#include "mmlio/core/floor_to.hpp"
+
 namespace mmlio::map {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
 
-int rowOf(double elevation_rad, double inv_res) { return static_cast<int>(std::floor((elevation_rad * kRadToDeg + 90.0) * inv_res)); }
+int rowOf(double elevation_rad, double inv_res) { return floorTo<int>((elevation_rad * kRadToDeg + 90.0) * inv_res); }
 
 // atan2 to within 1e-5 rad (a polynomial for atan on [0, 1], then octant folding): pixels are
 // 0.5 deg, and libm's atan2 and asin were a third of a hall run's visibility tests.
@@ -50,8 +52,8 @@ RangeImage::RangeImage(const std::vector<Point>& points, const RangeImageConfig&
     lo = std::min(lo, row);
     hi = std::max(hi, row);
     // Centimetres rounded half up, as lround would for these positive values, inline (the libm
-    // call was a tenth of building an image).
-    const double cm = std::clamp(std::floor(r * 100.0 + 0.5), 1.0, 65535.0);
+    // call was a tenth of building an image); truncation floors a positive value.
+    const double cm = std::clamp(r * 100.0 + 0.5, 1.0, 65535.0);
     cells.push_back({col, row, static_cast<std::uint16_t>(cm)});
   }
   if (cells.empty()) return;
@@ -170,7 +172,7 @@ void RangeImage::summariseWindows() {
 }
 
 int RangeImage::colOf(const Eigen::Vector3d& p) const {
-  return std::clamp(static_cast<int>(std::floor((fastAtan2(p.y(), p.x()) * kRadToDeg + 180.0) * inv_res_)), 0,
+  return std::clamp(floorTo<int>((fastAtan2(p.y(), p.x()) * kRadToDeg + 180.0) * inv_res_), 0,
                     circle_cols_ - 1);
 }
 

@@ -8,6 +8,7 @@
 #include <limits>
 #include <utility>
 
+#include "mmlio/core/floor_to.hpp"
 #include "mmlio/core/voxel_key.hpp"
 #include "mmlio/map/geometry_fit.hpp"
 
@@ -20,8 +21,7 @@ VoxelHashMap::VoxelHashMap(double voxel_m, int max_points_per_voxel, bool fit_pl
       fit_planes_(fit_planes) {}
 
 VoxelHashMap::Key VoxelHashMap::keyOf(const Eigen::Vector3d& p) const {
-  return Key{static_cast<int>(std::floor(p.x() * inv_voxel_)), static_cast<int>(std::floor(p.y() * inv_voxel_)),
-             static_cast<int>(std::floor(p.z() * inv_voxel_))};
+  return Key{floorTo<int>(p.x() * inv_voxel_), floorTo<int>(p.y() * inv_voxel_), floorTo<int>(p.z() * inv_voxel_)};
 }
 
 std::uint64_t VoxelHashMap::brickKey(const Key& k) {
