@@ -57,81 +57,115 @@ double straightness(const std::vector<Eigen::Vector3d>& P, int i, int K, int str
   return along > 0 ? across / along : std::numeric_limits<double>::infinity();
 }
 
+// What every point's test reads of one ordered scan line, computed in one pass.
+struct LineGeometry {
+  std::vector<double> sq_norm;           // |P_j|^2
+  std::vector<double> inv_range;         // 1 / |P_j| (P has no zero-range points)
+  std::vector<Eigen::Vector3d> prefix;   // prefix[j] = sum of P[0..j)
+  std::vector<char> gap;                 // gap[j]: break between j and j+1
+  std::vector<int> gaps_before;          // breaks between consecutive points among 0..j
+  double step_rad = 0.0;                 // median angular step between consecutive points (0: none)
+
+  bool continuous(int a, int b) const { return gaps_before[b] == gaps_before[a]; }  // a <= b
+};
+
+LineGeometry lineGeometry(const std::vector<Eigen::Vector3d>& P, double continuity_jump_m) {
+  const int n = static_cast<int>(P.size());
+  LineGeometry g;
+  g.sq_norm.resize(P.size());
+  g.inv_range.resize(P.size());
+  g.prefix.resize(P.size() + 1);
+  g.gap.assign(P.size(), 0);
+  g.gaps_before.assign(P.size(), 0);
+  g.prefix[0].setZero();
+  // The angular step comes from the bearings (unit rays), which range noise does not inflate.
+  std::vector<double> steps;
+  steps.reserve(P.size());
+  Eigen::Vector3d bearing_before = Eigen::Vector3d::Zero(), turn_before = Eigen::Vector3d::Zero();
+  for (int j = 0; j < n; ++j) {
+    g.sq_norm[j] = P[j].squaredNorm();
+    g.inv_range[j] = 1.0 / std::sqrt(g.sq_norm[j]);
+    g.prefix[j + 1] = g.prefix[j] + P[j];
+    const Eigen::Vector3d bearing = P[j] * g.inv_range[j];
+    if (j == 0) {
+      bearing_before = bearing;
+      continue;
+    }
+    const Eigen::Vector3d turn = bearing - bearing_before;
+    char& gap = g.gap[j - 1];
+    gap = (P[j] - P[j - 1]).squaredNorm() > continuity_jump_m * continuity_jump_m;
+    if (!gap) steps.push_back(turn.norm());
+    // A line that turns back on itself (the Livox pattern at the edge of its view) breaks there too.
+    if (j >= 2 && !gap && turn.dot(turn_before) < 0) gap = 1;
+    g.gaps_before[j] = g.gaps_before[j - 1] + gap;
+    bearing_before = bearing;
+    turn_before = turn;
+  }
+  if (steps.empty()) return g;
+  const auto middle = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+  std::nth_element(steps.begin(), middle, steps.end());
+  g.step_rad = std::max(*middle, 1e-6);
+  return g;
+}
+
 // Features of one ordered scan line. Neighbours are taken every `stride` points, the stride
-// chosen per point so that neighbours are at least min_neighbour_spacing_m apart: on dense lines (a close wall, Livox) range noise would
-// otherwise dominate the curvature. The centre is the mean of the points between its two nearest
-// neighbours, which damps its own noise without moving a corner.
+// chosen per point so that neighbours are at least min_neighbour_spacing_m apart: on dense lines
+// (a close wall, Livox) range noise would otherwise dominate the curvature. The centre is the mean
+// of the points between its two nearest neighbours, which damps its own noise without moving a
+// corner.
 void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConfig& cfg,
                  std::vector<std::size_t>* edges, std::vector<std::size_t>* planes) {
   const int n = static_cast<int>(P.size());
   if (n < 2 * K + 1) return;
-  std::vector<double> R(P.size());
-  std::vector<Eigen::Vector3d> U(P.size());      // bearings (unit rays); P has no zero-range points
-  std::vector<Eigen::Vector3d> prefix(P.size() + 1);  // prefix[j] = sum of P[0..j)
-  prefix[0].setZero();
-  for (int j = 0; j < n; ++j) {
-    R[j] = P[j].norm();
-    U[j] = P[j] / R[j];
-    prefix[j + 1] = prefix[j] + P[j];
-  }
-  std::vector<char> gap(P.size(), 0);  // gap[j]: break between j and j+1
-  // Angular step of the line from the bearings, which range noise does not inflate.
-  std::vector<double> step_rad;
-  step_rad.reserve(P.size());
-  for (int j = 0; j + 1 < n; ++j) {
-    gap[j] = (P[j + 1] - P[j]).squaredNorm() > cfg.continuity_jump_m * cfg.continuity_jump_m;
-    if (!gap[j]) step_rad.push_back((U[j + 1] - U[j]).norm());
-  }
-  // A line that turns back on itself (the Livox pattern at the edge of its view) breaks there too.
-  for (int j = 1; j + 1 < n; ++j)
-    if (!gap[j] && (U[j + 1] - U[j]).dot(U[j] - U[j - 1]) < 0) gap[j] = 1;
-  // gaps_before[j] = number of breaks between consecutive points among 0..j.
-  std::vector<int> gaps_before(P.size(), 0);
-  for (int j = 0; j + 1 < n; ++j) gaps_before[j + 1] = gaps_before[j] + gap[j];
-  if (step_rad.empty()) return;
-  std::nth_element(step_rad.begin(), step_rad.begin() + static_cast<std::ptrdiff_t>(step_rad.size() / 2), step_rad.end());
-  const double line_step_rad = std::max(step_rad[step_rad.size() / 2], 1e-6);
+  const LineGeometry g = lineGeometry(P, cfg.continuity_jump_m);
+  if (g.step_rad <= 0.0) return;
   const int max_stride = std::max(1, cfg.max_stride);
-  const auto strideAt = [&](int i) {
-    const double s = std::ceil(cfg.min_neighbour_spacing_m / (line_step_rad * R[i]));
-    return static_cast<int>(std::clamp(s, 1.0, static_cast<double>(max_stride)));
-  };
-  const auto continuous = [&](int a, int b) { return gaps_before[b] - gaps_before[a] == 0; };  // a <= b
+  // A neighbour `stride` points away lies about stride * step_rad * range away.
+  const double points_per_spacing_at_1m = cfg.min_neighbour_spacing_m / g.step_rad;
+  std::vector<double> inv_centre_count(static_cast<std::size_t>(max_stride) + 1);
+  for (int s = 1; s <= max_stride; ++s) inv_centre_count[s] = 1.0 / (2 * s - 1);
 
   std::vector<Candidate> cand(P.size());
-  std::vector<int> span_of(P.size(), K);
   const double min_bend_cos = std::cos(cfg.edge_min_bend_deg * M_PI / 180.0);
   std::vector<Eigen::Vector3d> buf(static_cast<std::size_t>(2 * K + 1));
   for (int i = 0; i < n; ++i) {
-    const int stride = strideAt(i);
+    const double wanted = points_per_spacing_at_1m * g.inv_range[i];
+    int stride = max_stride;
+    if (wanted < max_stride) {
+      stride = std::max(1, static_cast<int>(wanted));
+      if (stride < wanted) ++stride;  // ceil
+    }
+    cand[i].stride = stride;
     const int span = K * stride;
-    span_of[i] = span;
     const int lo = i - span, hi = i + span;
-    if (lo >= 0 && hi < n && continuous(lo, hi)) {
-      const Eigen::Vector3d centre = (prefix[i + stride] - prefix[i - stride + 1]) / (2 * stride - 1);
-      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-      double sq = 0.0;
+    if (lo >= 0 && hi < n && g.continuous(lo, hi)) {
+      const Eigen::Vector3d centre = (g.prefix[i + stride] - g.prefix[i - stride + 1]) * inv_centre_count[stride];
+      // c = |sum_j (p_j - centre)|^2 / sum_j |p_j - centre|^2, from the sums of p_j and |p_j|^2.
+      Eigen::Vector3d sum_p = Eigen::Vector3d::Zero();
+      double sum_sq = 0.0;
       for (int k = 1; k <= K; ++k) {
-        const Eigen::Vector3d a = P[i - k * stride] - centre, b = P[i + k * stride] - centre;
-        sum += a + b;
-        sq += a.squaredNorm() + b.squaredNorm();
+        const int l = i - k * stride, r = i + k * stride;
+        sum_p += P[l] + P[r];
+        sum_sq += g.sq_norm[l] + g.sq_norm[r];
       }
-      if (sq <= 0.0) continue;
-      const double c = sum.squaredNorm() / sq;
+      const double m = 2.0 * K;
+      const Eigen::Vector3d offsets = sum_p - m * centre;
+      const double spread = sum_sq - 2.0 * centre.dot(sum_p) + m * centre.squaredNorm();
+      if (!(spread > 1e-12 * sum_sq)) continue;  // all neighbours on the centre (cancellation floor)
+      const double c = offsets.squaredNorm() / spread;
       cand[i].curvature = c;
       if (c > cfg.edge_threshold) {
         cand[i].label = Label::kEdge;  // the line-edge shape is checked only for the points picked below
-        cand[i].stride = stride;
       } else if (c < cfg.plane_threshold) {
         cand[i].label = Label::kPlane;  // flatness is checked only for the points picked below
-        cand[i].stride = stride;
       }
       continue;
     }
     // Break points: the near side of a depth jump, with a continuous neighbourhood on its own side.
-    const bool jump_right = i + 1 < n && gap[i] && R[i + 1] - R[i] > cfg.continuity_jump_m;
-    const bool jump_left = i >= 1 && gap[i - 1] && R[i - 1] - R[i] > cfg.continuity_jump_m;
-    if ((jump_right && lo >= 0 && continuous(lo, i)) || (jump_left && hi < n && continuous(i, hi))) {
+    const auto fartherThanI = [&](int j) { return std::sqrt(g.sq_norm[j]) - std::sqrt(g.sq_norm[i]) > cfg.continuity_jump_m; };
+    const bool jump_right = i + 1 < n && g.gap[i] && fartherThanI(i + 1);
+    const bool jump_left = i >= 1 && g.gap[i - 1] && fartherThanI(i - 1);
+    if ((jump_right && lo >= 0 && g.continuous(lo, i)) || (jump_left && hi < n && g.continuous(i, hi))) {
       cand[i].label = Label::kBreak;
       cand[i].curvature = std::numeric_limits<double>::infinity();
     }
@@ -140,7 +174,7 @@ void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConf
   // Line edge only if the two halves are lines meeting at an angle (not one noisy point). Two
   // eigen decompositions per point: evaluated only for the candidates the picking reaches.
   const auto isLineEdge = [&](int i, int stride) {
-    const Eigen::Vector3d centre = (prefix[i + stride] - prefix[i - stride + 1]) / (2 * stride - 1);
+    const Eigen::Vector3d centre = (g.prefix[i + stride] - g.prefix[i - stride + 1]) * inv_centre_count[stride];
     Eigen::Vector3d ev;
     Eigen::Matrix3d evec;
     for (int k = 0; k <= K; ++k) buf[k] = P[i - k * stride];
@@ -173,7 +207,8 @@ void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConf
       if (cand[i].label == Label::kEdge && !isLineEdge(i, cand[i].stride)) continue;
       edges->push_back(static_cast<std::size_t>(i));
       ++picked;
-      for (int k = std::max(0, i - span_of[i]); k <= std::min(n - 1, i + span_of[i]); ++k) suppressed[k] = 1;
+      const int span = K * cand[i].stride;
+      for (int k = std::max(0, i - span); k <= std::min(n - 1, i + span); ++k) suppressed[k] = 1;
     }
     if (!cfg.planes) continue;
     // Planes: the flattest max_planes_per_sector; the neighbourhood must be a straight run.
