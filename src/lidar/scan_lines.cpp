@@ -1,6 +1,7 @@
 // Scan lines for feature extraction: rings, Livox lines, or range-image rows.
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <numeric>
 
 #include "mmlio/lidar/features.hpp"
@@ -32,25 +33,32 @@ double elevationDeg(const Point& p) {
   return std::atan2(v.z(), v.head<2>().norm()) * 180.0 / M_PI;
 }
 
-/// Sorts by key as std::stable_sort would, without its n log n for the shapes one turn of a ring
-/// comes in: ascending, or descending (a clockwise spin, as Velodyne's), either cut once where the
-/// sweep started. Two runs, the second wholly before the first, are put in order by a rotation
-/// (no key is shared across the cut); a descending ring is reversed first, which keeps the stable
-/// order only where no two keys are equal, so that case asks for strictly descending runs.
+/// Sorts by key as std::stable_sort would, without its n log n for the shapes a ring comes in: one
+/// ascending run, or descending (a clockwise spin, as Velodyne's), cut once where the sweep started;
+/// the two runs overlap in azimuth when the sweep is a little longer than a turn. They are merged
+/// (linear). A merge keeps equal keys in their first-come order; a descending ring is merged from
+/// its far ends, which keeps that order only where no two keys within a run are equal, so that case
+/// asks for strictly descending runs.
 void sortRingByKey(std::vector<std::pair<double, std::size_t>>* keyed) {
+  auto& v = *keyed;
   const auto by_key = [](const auto& a, const auto& b) { return a.first < b.first; };
-  const auto cutIntoOrder = [&](const auto& precedes) {  // precedes: the runs' order relation
-    const auto cut = std::is_sorted_until(keyed->begin(), keyed->end(), precedes);
-    if (cut == keyed->end()) return true;
-    if (!std::is_sorted(cut, keyed->end(), precedes) || !by_key(keyed->back(), keyed->front())) return false;
-    std::rotate(keyed->begin(), cut, keyed->end());
-    return true;
-  };
-  if (cutIntoOrder(by_key)) return;
-  std::reverse(keyed->begin(), keyed->end());
-  if (cutIntoOrder([](const auto& a, const auto& b) { return a.first <= b.first; })) return;  // strictly
-  std::reverse(keyed->begin(), keyed->end());
-  std::stable_sort(keyed->begin(), keyed->end(), by_key);
+  const auto ascending_cut = std::is_sorted_until(v.begin(), v.end(), by_key);
+  if (ascending_cut == v.end()) return;
+  if (std::is_sorted(ascending_cut, v.end(), by_key)) {
+    std::inplace_merge(v.begin(), ascending_cut, v.end(), by_key);
+    return;
+  }
+  const auto strictly_descending = [](const auto& a, const auto& b) { return a.first >= b.first; };
+  const auto descending_cut = std::is_sorted_until(v.begin(), v.end(), strictly_descending);
+  if (std::is_sorted(descending_cut, v.end(), strictly_descending)) {
+    // Both runs read backwards are ascending; of equal keys the first run's comes first.
+    std::vector<std::pair<double, std::size_t>> merged(v.size());
+    const auto first_run_end = std::make_reverse_iterator(descending_cut);
+    std::merge(first_run_end, v.rend(), v.rbegin(), first_run_end, merged.begin(), by_key);
+    v.swap(merged);
+    return;
+  }
+  std::stable_sort(v.begin(), v.end(), by_key);
 }
 
 // Spinning rings are ordered by azimuth (drivers' per-point times are not always monotonic along a

@@ -121,6 +121,44 @@ TEST(Features, RingsAreReadInAzimuthOrderWhereverTheSweepStartsAndHoweverThePoin
     }
 }
 
+TEST(Features, RingsOfASweepLongerThanATurnAreReadInAzimuthOrder) {
+  // A sweep window a little longer than one turn: each ring's last points pass its first azimuths
+  // again, in either spin direction: 0.07 deg apart from them (a third of the VLP-16's step), or at
+  // the very same azimuth (farther), which must come after the first-come point, as a stable sort has it.
+  const LidarScan scan = synth::vlp16Room(BoxRoom{}, 0.01);
+  LidarScan clockwise = scan;
+  std::reverse(clockwise.points.begin(), clockwise.points.end());
+  const Eigen::Matrix3f nudge =
+      Eigen::AngleAxisf(0.07f * static_cast<float>(M_PI) / 180.f, Eigen::Vector3f::UnitZ()).toRotationMatrix();
+  const auto azimuth = [](const Point& p) { return std::atan2(static_cast<double>(p.xyz.y()), static_cast<double>(p.xyz.x())); };
+  for (const LidarScan* turn : std::array<const LidarScan*, 2>{&scan, &clockwise})
+    for (const double start_fraction : {0.0, 0.5})
+      for (const bool same_azimuth : {false, true}) {
+        LidarScan longer = *turn;
+        std::rotate(longer.points.begin(),
+                    longer.points.begin() + static_cast<std::ptrdiff_t>(start_fraction * longer.points.size()),
+                    longer.points.end());
+        const std::size_t again = longer.points.size() / 16;
+        for (std::size_t i = 0; i < again; ++i) {
+          Point p = longer.points[i];
+          p.xyz = same_azimuth ? Eigen::Vector3f(2.f * p.xyz) : Eigen::Vector3f(nudge * p.xyz);  // x2: exact
+          longer.points.push_back(p);
+        }
+        const auto lines = scanLines(longer, LidarKind::kSpinning, 16, FeatureConfig{});
+        ASSERT_EQ(lines.size(), 16u);
+        for (std::size_t r = 0; r < lines.size(); ++r) {
+          std::vector<std::size_t> expected;  // the ring's points as they came, stably sorted by azimuth
+          for (std::size_t i = 0; i < longer.points.size(); ++i)
+            if (longer.points[i].ring == r) expected.push_back(i);
+          std::stable_sort(expected.begin(), expected.end(), [&](std::size_t a, std::size_t b) {
+            return azimuth(longer.points[a]) < azimuth(longer.points[b]);
+          });
+          EXPECT_EQ(lines[r], expected) << "ring " << r << (turn == &clockwise ? " clockwise" : "") << " from "
+                                        << start_fraction << (same_azimuth ? " same azimuth" : "");
+        }
+      }
+}
+
 TEST(Features, LivoxLikeLineScanGivesCornerEdgesAndWallPlanes) {
   const BoxRoom room;
   // Looking at the corner (6, 5): the view holds two walls, the floor and their edges.
