@@ -78,9 +78,10 @@ LineGeometry lineGeometry(const std::vector<Eigen::Vector3d>& P, double continui
   g.gap.assign(P.size(), 0);
   g.gaps_before.assign(P.size(), 0);
   g.prefix[0].setZero();
-  // The angular step comes from the bearings (unit rays), which range noise does not inflate.
-  std::vector<double> steps;
-  steps.reserve(P.size());
+  // The angular step comes from the bearings (unit rays), which range noise does not inflate;
+  // squared steps have the same median, without a square root per point.
+  std::vector<double> squared_steps;
+  squared_steps.reserve(P.size());
   Eigen::Vector3d bearing_before = Eigen::Vector3d::Zero(), turn_before = Eigen::Vector3d::Zero();
   for (int j = 0; j < n; ++j) {
     g.sq_norm[j] = P[j].squaredNorm();
@@ -94,17 +95,17 @@ LineGeometry lineGeometry(const std::vector<Eigen::Vector3d>& P, double continui
     const Eigen::Vector3d turn = bearing - bearing_before;
     char& gap = g.gap[j - 1];
     gap = (P[j] - P[j - 1]).squaredNorm() > continuity_jump_m * continuity_jump_m;
-    if (!gap) steps.push_back(turn.norm());
+    if (!gap) squared_steps.push_back(turn.squaredNorm());
     // A line that turns back on itself (the Livox pattern at the edge of its view) breaks there too.
     if (j >= 2 && !gap && turn.dot(turn_before) < 0) gap = 1;
     g.gaps_before[j] = g.gaps_before[j - 1] + gap;
     bearing_before = bearing;
     turn_before = turn;
   }
-  if (steps.empty()) return g;
-  const auto middle = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
-  std::nth_element(steps.begin(), middle, steps.end());
-  g.step_rad = std::max(*middle, 1e-6);
+  if (squared_steps.empty()) return g;
+  const auto middle = squared_steps.begin() + static_cast<std::ptrdiff_t>(squared_steps.size() / 2);
+  std::nth_element(squared_steps.begin(), middle, squared_steps.end());
+  g.step_rad = std::max(std::sqrt(*middle), 1e-6);
   return g;
 }
 
@@ -152,13 +153,16 @@ void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConf
       const Eigen::Vector3d offsets = sum_p - m * centre;
       const double spread = sum_sq - 2.0 * centre.dot(sum_p) + m * centre.squaredNorm();
       if (!(spread > 1e-12 * sum_sq)) continue;  // all neighbours on the centre (cancellation floor)
-      const double c = offsets.squaredNorm() / spread;
-      cand[i].curvature = c;
-      if (c > cfg.edge_threshold) {
+      // Only candidates need their curvature (for ranking): the rest are told by a product.
+      const double bent = offsets.squaredNorm();
+      if (bent > cfg.edge_threshold * spread) {
         cand[i].label = Label::kEdge;  // the line-edge shape is checked only for the points picked below
-      } else if (c < cfg.plane_threshold) {
+      } else if (cfg.planes && bent < cfg.plane_threshold * spread) {
         cand[i].label = Label::kPlane;  // flatness is checked only for the points picked below
+      } else {
+        continue;
       }
+      cand[i].curvature = bent / spread;
       continue;
     }
     // Break points: the near side of a depth jump, with a continuous neighbourhood on its own side.
