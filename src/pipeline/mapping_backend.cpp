@@ -117,8 +117,9 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
     }
   // Points go into the current keyframe's submap, in that keyframe's frame. The odometry lists
   // points_body LiDAR by LiDAR, in the order of sweep.lidars.
-  const std::size_t stride = static_cast<std::size_t>(std::max(1, cfg_.map_point_stride));
-  const std::size_t phase = sweeps_++ % stride;
+  std::size_t stride = static_cast<std::size_t>(std::max(1, cfg_.map_point_stride));
+  std::size_t phase = sweeps_++ % stride;
+  if (sweep.points_body_thinned) stride = 1, phase = 0;  // keepWhatTheMapTakes did it
   const Eigen::Isometry3d T_keyframe_body = T_world_keyframe_.inverse() * T_world_body;
   std::size_t listed = 0;
   for (const auto& l : sweep.lidars) listed += l.points;
@@ -132,6 +133,19 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
     openAccumulator(key).add(strided_, T_keyframe_body);
     begin = end;
   }
+}
+
+void MappingBackend::keepWhatTheMapTakes(estimator::SweepResult* sweep, std::size_t index, const Config& cfg) {
+  const std::size_t stride = static_cast<std::size_t>(std::max(1, cfg.map_point_stride));
+  // Per-LiDAR maps take each LiDAR's part of the points from its own offset: left whole.
+  if (sweep->keyframe || index == 0 || stride == 1 || cfg.per_lidar_maps || sweep->points_body_thinned) return;
+  std::vector<Point>& pts = sweep->points_body;
+  std::size_t kept = 0;
+  for (std::size_t i = index % stride; i < pts.size(); i += stride) pts[kept++] = pts[i];
+  pts.resize(kept);
+  pts.shrink_to_fit();
+  sweep->points_body_thinned = true;
+  sweep->view.reset();
 }
 
 MapAccumulator& MappingBackend::openAccumulator(const std::string& key) {

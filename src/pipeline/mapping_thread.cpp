@@ -9,7 +9,7 @@
 namespace mmlio::pipeline {
 
 MappingThread::MappingThread(MappingBackend::Config cfg, std::size_t capacity)
-    : backend_(std::move(cfg)), capacity_(std::max<std::size_t>(1, capacity)), worker_([this] { run(); }) {}
+    : cfg_(std::move(cfg)), backend_(cfg_), capacity_(std::max<std::size_t>(1, capacity)), worker_([this] { run(); }) {}
 
 MappingThread::~MappingThread() {
   {
@@ -22,6 +22,7 @@ MappingThread::~MappingThread() {
 }
 
 void MappingThread::addSweep(estimator::SweepResult sweep) {
+  MappingBackend::keepWhatTheMapTakes(&sweep, handed_++, cfg_);
   std::unique_lock<std::mutex> lock(mutex_);
   not_full_.wait(lock, [this] { return queue_.size() < capacity_ || closing_; });
   if (closing_) return;

@@ -33,6 +33,11 @@ class MappingBackend {
 
   /// Every tracked sweep in order (keyframe sweeps open a new submap and graph node).
   void addSweep(const estimator::SweepResult& sweep);
+  /// Leaves a sweep that opens no keyframe with what addSweep takes of it, as the sweep number
+  /// `index` of the stream (from 0): every map_point_stride-th point, no view. Sweeps waiting in a
+  /// hand-off queue through a loop verification then hold a quarter of their points; the map is
+  /// the same. The first sweep opens the first keyframe whatever it is, so it is left whole.
+  static void keepWhatTheMapTakes(estimator::SweepResult* sweep, std::size_t index, const Config& cfg);
 
   /// After the last sweep: a loop check on the last keyframe if it has not had one.
   void finish();

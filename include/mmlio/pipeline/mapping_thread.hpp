@@ -44,6 +44,8 @@ class MappingThread {
  private:
   void run();
 
+  const MappingBackend::Config cfg_;
+  std::size_t handed_ = 0;  // sweeps queued so far (the producer's count)
   MappingBackend backend_;
   std::size_t capacity_;
   static constexpr std::size_t kTrimEveryKeyframes = 10;
