@@ -143,5 +143,43 @@ TEST(MappingThread, OnItsOwnThreadTheBackEndGivesExactlyWhatItGivesInline) {
   EXPECT_EQ(thread.timing().sweeps(), w.truth.size());
 }
 
+TEST(MappingThread, QueuesSweepsWithoutAKeyframeThinnedToWhatTheMapTakesAndMapsTheSame) {
+  const auto scene = backend::testing::roomA();
+  const Walk w = roomWalk();
+  MappingBackend::Config cfg = config();
+  cfg.map_point_stride = 3;  // with map_leaf_m 0: every point the map takes shows in it
+  cfg.map_leaf_m = 0.0;
+  // Each keyframe is followed by two sweeps that open none (other scans from the same place).
+  std::vector<estimator::SweepResult> sweeps;
+  for (std::size_t i = 0; i < w.truth.size(); ++i)
+    for (unsigned extra = 0; extra < 3; ++extra) {
+      estimator::SweepResult r = sweepAt(w, i, scene);
+      if (extra > 0) {
+        r.keyframe = false;
+        r.points_body.clear();
+        const unsigned seed = 500 + 10 * static_cast<unsigned>(i) + extra;
+        for (const Eigen::Vector3d& p : backend::testing::scan(scene, w.truth[i], seed)) {
+          Point q;
+          q.xyz = p.cast<float>();
+          r.points_body.push_back(q);
+        }
+      }
+      sweeps.push_back(r);
+    }
+  MappingBackend inline_backend(cfg);
+  for (const auto& r : sweeps) inline_backend.addSweep(r);
+  inline_backend.finish();
+  estimator::SweepResult thinned = sweeps[1];
+  MappingBackend::keepWhatTheMapTakes(&thinned, 1, cfg);
+  EXPECT_TRUE(thinned.points_body_thinned);
+  EXPECT_EQ(thinned.points_body.size(), (sweeps[1].points_body.size() + 1) / 3);  // from offset 1 of 3
+  MappingThread thread(cfg, 2);
+  for (const auto& r : sweeps) thread.addSweep(r);
+  MappingBackend& threaded = thread.finish();
+  const std::vector<Point> a = inline_backend.map(), b = threaded.map();
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i].xyz, b[i].xyz) << i;
+}
+
 }  // namespace
 }  // namespace mmlio::pipeline
