@@ -117,9 +117,11 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
     }
   // Points go into the current keyframe's submap, in that keyframe's frame. The odometry lists
   // points_body LiDAR by LiDAR, in the order of sweep.lidars.
-  std::size_t stride = static_cast<std::size_t>(std::max(1, cfg_.map_point_stride));
-  std::size_t phase = sweeps_++ % stride;
-  if (sweep.points_body_thinned) stride = 1, phase = 0;  // keepWhatTheMapTakes did it
+  const std::size_t map_stride = static_cast<std::size_t>(std::max(1, cfg_.map_point_stride));
+  const std::size_t map_phase = sweeps_++ % map_stride;
+  // A thinned sweep holds just these points already (keepWhatTheMapTakes).
+  const std::size_t stride = sweep.points_body_thinned ? 1 : map_stride;
+  const std::size_t phase = sweep.points_body_thinned ? 0 : map_phase;
   const Eigen::Isometry3d T_keyframe_body = T_world_keyframe_.inverse() * T_world_body;
   std::size_t listed = 0;
   for (const auto& l : sweep.lidars) listed += l.points;
