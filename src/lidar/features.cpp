@@ -155,18 +155,16 @@ void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConf
       if (!(spread > 1e-12 * sum_sq)) continue;  // all neighbours on the centre (cancellation floor)
       // Only candidates need their curvature (for ranking): the rest are told by a product.
       const double bent = offsets.squaredNorm();
-      if (bent > cfg.edge_threshold * spread) {
+      if (bent > cfg.edge_threshold * spread)
         cand[i].label = Label::kEdge;  // the line-edge shape is checked only for the points picked below
-      } else if (cfg.planes && bent < cfg.plane_threshold * spread) {
+      else if (cfg.planes && bent < cfg.plane_threshold * spread)
         cand[i].label = Label::kPlane;  // flatness is checked only for the points picked below
-      } else {
-        continue;
-      }
-      cand[i].curvature = bent / spread;
+      if (cand[i].label != Label::kNone) cand[i].curvature = bent / spread;
       continue;
     }
     // Break points: the near side of a depth jump, with a continuous neighbourhood on its own side.
-    const auto fartherThanI = [&](int j) { return std::sqrt(g.sq_norm[j]) - std::sqrt(g.sq_norm[i]) > cfg.continuity_jump_m; };
+    const double range = std::sqrt(g.sq_norm[i]);
+    const auto fartherThanI = [&](int j) { return std::sqrt(g.sq_norm[j]) - range > cfg.continuity_jump_m; };
     const bool jump_right = i + 1 < n && g.gap[i] && fartherThanI(i + 1);
     const bool jump_left = i >= 1 && g.gap[i - 1] && fartherThanI(i - 1);
     if ((jump_right && lo >= 0 && g.continuous(lo, i)) || (jump_left && hi < n && g.continuous(i, hi))) {

@@ -1,6 +1,5 @@
 #include "mmlio/lidar/voxel_filter.hpp"
 
-#include <cmath>
 #include <cstdint>
 #include "mmlio/core/flat_key_index.hpp"
 #include "mmlio/core/voxel_key.hpp"

@@ -141,11 +141,11 @@ void MappingBackend::keepWhatTheMapTakes(estimator::SweepResult* sweep, std::siz
   const std::size_t stride = static_cast<std::size_t>(std::max(1, cfg.map_point_stride));
   // Per-LiDAR maps take each LiDAR's part of the points from its own offset: left whole.
   if (sweep->keyframe || index == 0 || stride == 1 || cfg.per_lidar_maps || sweep->points_body_thinned) return;
-  std::vector<Point>& pts = sweep->points_body;
-  std::size_t kept = 0;
-  for (std::size_t i = index % stride; i < pts.size(); i += stride) pts[kept++] = pts[i];
-  pts.resize(kept);
-  pts.shrink_to_fit();
+  const std::vector<Point>& all = sweep->points_body;
+  std::vector<Point> taken;
+  taken.reserve(all.size() / stride + 1);
+  for (std::size_t i = index % stride; i < all.size(); i += stride) taken.push_back(all[i]);
+  sweep->points_body = std::move(taken);
   sweep->points_body_thinned = true;
   sweep->view.reset();
 }

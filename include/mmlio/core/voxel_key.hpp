@@ -16,7 +16,7 @@ inline std::uint64_t packVoxelKey(std::int64_t ix, std::int64_t iy, std::int64_t
 
 /// Key of the voxel of edge leaf_m that holds p (indices floor(coordinate / leaf_m)), or of the one
 /// (dx, dy, dz) voxels from it. Grids indexed by coordinate * (1 / leaf) round differently at
-/// voxel borders and keep their own indexing.
+/// voxel borders: they use scaledVoxelKeyOf.
 inline std::uint64_t voxelKeyOf(const Eigen::Vector3d& p, double leaf_m, int dx = 0, int dy = 0, int dz = 0) {
   const auto idx = [leaf_m](double v) { return floorTo<std::int64_t>(v / leaf_m); };
   return packVoxelKey(idx(p.x()) + dx, idx(p.y()) + dy, idx(p.z()) + dz);
