@@ -158,31 +158,6 @@ std::size_t VoxelHashMap::removeIf(const Eigen::Vector3d& center, double radius_
   return total;
 }
 
-// The cells around a query lie in a few bricks (at most 8 for the 27 nearest cells): each brick
-// is looked up in the hash once per query, not once per cell.
-class VoxelHashMap::BrickCache {
- public:
-  explicit BrickCache(const VoxelHashMap& map) : map_(map) {}
-  const Brick* find(std::uint64_t brick_key) {
-    for (int i = 0; i < size_; ++i)
-      if (keys_[i] == brick_key) return bricks_[i];
-    const std::uint32_t b = map_.brick_index_.find(brick_key);
-    const Brick* brick = b == kNone ? nullptr : &map_.bricks_[b];
-    const int slot = size_ < kSlots ? size_++ : (next_++ % kSlots);
-    keys_[slot] = brick_key;
-    bricks_[slot] = brick;
-    return brick;
-  }
-
- private:
-  static constexpr int kSlots = 8;
-  const VoxelHashMap& map_;
-  std::array<std::uint64_t, kSlots> keys_{};
-  std::array<const Brick*, kSlots> bricks_{};
-  int size_ = 0;
-  int next_ = 0;
-};
-
 int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
                       std::vector<Eigen::Vector3d>* out) const {
   out->clear();
@@ -221,41 +196,73 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
     for (const Voxel& v : voxels_) visit(v);
   } else {
     const int max_ring = std::max(1, static_cast<int>(rings));
-    // Squared distance from q to the voxel `offset` cells from q's own along one axis.
-    const auto axisGap = [this](double coord, int cell, int offset) {
-      if (offset == 0) return 0.0;
-      const double face = (offset > 0 ? cell + offset : cell + offset + 1) * voxel_m_;
-      const double d = offset > 0 ? face - coord : coord - face;
-      return d * d;
-    };
-    double to_own_faces = voxel_m_;  // q's distance to the nearest face of its own voxel
+    const int side = 2 * max_ring + 1;
+    // Per axis, once per query: the squared distance from q to the cells `offset` from its own
+    // (index offset + max_ring), and which of the cube's bricks each lies in.
+    thread_local std::vector<double> gaps;
+    thread_local std::vector<int> brick_of;
+    gaps.resize(3 * static_cast<std::size_t>(side));
+    brick_of.resize(3 * static_cast<std::size_t>(side));
     const int cell[3] = {c.x, c.y, c.z};
+    double to_own_faces = voxel_m_;  // q's distance to the nearest face of its own voxel
     for (int a = 0; a < 3; ++a) {
       const double lower = cell[a] * voxel_m_;
       to_own_faces = std::min({to_own_faces, q[a] - lower, lower + voxel_m_ - q[a]});
+      const int first_brick = (cell[a] - max_ring) >> kBrickShift;
+      for (int offset = -max_ring; offset <= max_ring; ++offset) {
+        double gap = 0.0;
+        if (offset != 0) {
+          const double face = (offset > 0 ? cell[a] + offset : cell[a] + offset + 1) * voxel_m_;
+          const double d = offset > 0 ? face - q[a] : q[a] - face;
+          gap = d * d;
+        }
+        const std::size_t at = static_cast<std::size_t>(a * side + offset + max_ring);
+        gaps[at] = gap;
+        brick_of[at] = ((cell[a] + offset) >> kBrickShift) - first_brick;
+      }
     }
     to_own_faces = std::max(to_own_faces, 0.0);
-    BrickCache bricks(*this);
+    const double* const gx = gaps.data() + max_ring;
+    const double* const gy = gx + side;
+    const double* const gz = gy + side;
+    const int* const bx = brick_of.data() + max_ring;
+    const int* const by = bx + side;
+    const int* const bz = by + side;
+    // The bricks the cube reaches, each looked up in the hash at most once per query.
+    const int bricks_per_axis = ((max_ring * 2) >> kBrickShift) + 2;
+    thread_local std::vector<const Brick*> bricks;
+    thread_local std::vector<char> looked_up;
+    const auto n_bricks = static_cast<std::size_t>(bricks_per_axis * bricks_per_axis * bricks_per_axis);
+    bricks.resize(n_bricks);
+    looked_up.assign(n_bricks, 0);
+    const int first_bx = (c.x - max_ring) >> kBrickShift, first_by = (c.y - max_ring) >> kBrickShift,
+              first_bz = (c.z - max_ring) >> kBrickShift;
+    const auto brickAt = [&](int ix, int iy, int iz) {
+      const auto at = static_cast<std::size_t>((ix * bricks_per_axis + iy) * bricks_per_axis + iz);
+      if (!looked_up[at]) {
+        looked_up[at] = 1;
+        const std::uint32_t b = brick_index_.find(packVoxelKey(first_bx + ix, first_by + iy, first_bz + iz));
+        bricks[at] = b == kNone ? nullptr : &bricks_[b];
+      }
+      return bricks[at];
+    };
     for (int r = 0; r <= max_ring; ++r) {
       for (int dx = -r; dx <= r; ++dx) {
         // A voxel that cannot hold a point nearer than the bound is not looked up; the bound only
         // shrinks, so a slab or row already beyond it is left whole.
-        const double gx = axisGap(q.x(), c.x, dx);
-        if (gx >= bound) continue;
+        if (gx[dx] >= bound) continue;
         for (int dy = -r; dy <= r; ++dy) {
-          const double gxy = gx + axisGap(q.y(), c.y, dy);
+          const double gxy = gx[dx] + gy[dy];
           if (gxy >= bound) continue;
           // The shell of ring r only: a column (dx, dy) off the shell's sides holds just its two
           // cells dz = -r and dz = r.
           const bool face = std::abs(dx) == r || std::abs(dy) == r;
           const int dz_step = face || r == 0 ? 1 : 2 * r;
           for (int dz = -r; dz <= r; dz += dz_step) {
-            const double gap2 = gxy + axisGap(q.z(), c.z, dz);
-            if (gap2 >= bound) continue;
-            const Key key{c.x + dx, c.y + dy, c.z + dz};
-            const Brick* brick = bricks.find(brickKey(key));
+            if (gxy + gz[dz] >= bound) continue;
+            const Brick* brick = brickAt(bx[dx], by[dy], bz[dz]);
             if (!brick) continue;
-            const std::uint32_t v = (*brick)[slotInBrick(key)];
+            const std::uint32_t v = (*brick)[slotInBrick(Key{c.x + dx, c.y + dy, c.z + dz})];
             if (v != kNone) visit(voxels_[v]);
           }
         }

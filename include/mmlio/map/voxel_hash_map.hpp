@@ -81,7 +81,6 @@ class VoxelHashMap {
   using Brick = std::array<std::uint32_t, 1 << (3 * kBrickShift)>;  // voxel index per slot, or kNone
   static constexpr std::uint32_t kNone = FlatKeyIndex::kNone;
   static std::uint64_t brickKey(const Key& k);
-  class BrickCache;
   static int slotInBrick(const Key& k) {
     return (k.x & kBrickMask) | (k.y & kBrickMask) << kBrickShift | (k.z & kBrickMask) << (2 * kBrickShift);
   }
