@@ -29,15 +29,21 @@ void SweepAligner::add(const LidarScan& scan) {
     q.order = sensors_.size() - 1;
     if (fallback_sensor_.empty() && scan.sensor != cfg_.reference) fallback_sensor_ = scan.sensor;
   }
+  // Cut points are dropped once they are half the queue: erasing them at every cut moved the
+  // queued sweeps (max_wait_s of points) to the front each time.
+  if (2 * q.head > q.points.size()) {
+    q.points.erase(q.points.begin(), q.points.begin() + static_cast<std::ptrdiff_t>(q.head));
+    q.head = 0;
+  }
   // Append, keeping the queue sorted even if this scan overlaps the previous one.
   const std::size_t old_size = q.points.size();
   for (const Point& p : scan.points) q.points.push_back({scan.start_ns + fromSec(p.time_s), p});
   const auto by_time = [](const TimedPoint& a, const TimedPoint& b) { return a.t_ns < b.t_ns; };
   if (!std::is_sorted(q.points.begin() + static_cast<std::ptrdiff_t>(old_size), q.points.end(), by_time))
     std::stable_sort(q.points.begin() + static_cast<std::ptrdiff_t>(old_size), q.points.end(), by_time);
-  if (old_size > 0 && q.points[old_size].t_ns < q.points[old_size - 1].t_ns)
-    std::inplace_merge(q.points.begin(), q.points.begin() + static_cast<std::ptrdiff_t>(old_size), q.points.end(),
-                       by_time);
+  if (old_size > q.head && q.points[old_size].t_ns < q.points[old_size - 1].t_ns)
+    std::inplace_merge(q.points.begin() + static_cast<std::ptrdiff_t>(q.head),
+                       q.points.begin() + static_cast<std::ptrdiff_t>(old_size), q.points.end(), by_time);
   const Stamp first_ns = scan.start_ns + fromSec(scan.points.front().time_s);
   const Stamp end_ns = scan.endNs();
   q.latest_ns = std::max(q.latest_ns, end_ns);
@@ -108,23 +114,23 @@ AlignedSweep SweepAligner::cut(const Window& w) {
   std::sort(order.begin(), order.end());
   for (const auto& [rank, name] : order) {
     SensorQueue& q = sensors_[*name];
-    const auto before = std::partition_point(q.points.begin(), q.points.end(),
+    const auto front = q.points.begin() + static_cast<std::ptrdiff_t>(q.head);
+    const auto before = std::partition_point(front, q.points.end(),
                                              [&](const TimedPoint& t) { return t.t_ns < w.start_ns; });
-    dropped_points_ += static_cast<std::size_t>(before - q.points.begin());
-    q.points.erase(q.points.begin(), before);
+    dropped_points_ += static_cast<std::size_t>(before - front);
     LidarScan scan;
     scan.sensor = *name;
     scan.start_ns = w.start_ns;
     // The queue is in time order: the window's points are its front, up to the first at its end.
-    const auto end = std::partition_point(q.points.begin(), q.points.end(),
+    const auto end = std::partition_point(before, q.points.end(),
                                           [&](const TimedPoint& t) { return t.t_ns < w.end_ns; });
-    scan.points.reserve(static_cast<std::size_t>(end - q.points.begin()));
-    for (auto it = q.points.begin(); it != end; ++it) {
+    scan.points.reserve(static_cast<std::size_t>(end - before));
+    for (auto it = before; it != end; ++it) {
       Point p = it->p;
       p.time_s = static_cast<float>(toSec(it->t_ns - w.start_ns));
       scan.points.push_back(p);
     }
-    q.points.erase(q.points.begin(), end);
+    q.head = static_cast<std::size_t>(end - q.points.begin());
     if (!scan.points.empty()) out.scans.push_back(std::move(scan));
   }
   return out;

@@ -55,7 +55,8 @@ class SweepAligner {
     Point p;
   };
   struct SensorQueue {
-    std::vector<TimedPoint> points;                // sorted by t_ns; a window's are its front
+    std::vector<TimedPoint> points;                // sorted by t_ns; a window's are its front (from head)
+    std::size_t head = 0;                          // points before it were cut; dropped now and then
     std::deque<std::pair<Stamp, Stamp>> frames;    // [start, end) of its own frames not yet windowed
     Stamp latest_ns = 0;                           // newest point time received
     std::size_t order = 0;                         // first-seen rank
