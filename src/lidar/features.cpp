@@ -69,19 +69,25 @@ struct LineGeometry {
   bool continuous(int a, int b) const { return gaps_before[b] == gaps_before[a]; }  // a <= b
 };
 
-LineGeometry lineGeometry(const std::vector<Eigen::Vector3d>& P, double continuity_jump_m) {
+// Fills *g (storage reused from line to line: every element read is written here).
+void lineGeometry(const std::vector<Eigen::Vector3d>& P, double continuity_jump_m, LineGeometry* out) {
   const int n = static_cast<int>(P.size());
-  LineGeometry g;
-  g.sq_norm.resize(P.size());
-  g.inv_range.resize(P.size());
-  g.prefix.resize(P.size() + 1);
+  LineGeometry& g = *out;
+  g.step_rad = 0.0;
+  const auto atLeast = [](auto& v, std::size_t size) {
+    if (v.size() < size) v.resize(size);
+  };
+  atLeast(g.sq_norm, P.size());
+  atLeast(g.inv_range, P.size());
+  atLeast(g.prefix, P.size() + 1);
   g.gap.assign(P.size(), 0);
-  g.gaps_before.assign(P.size(), 0);
+  atLeast(g.gaps_before, P.size());
+  g.gaps_before[0] = 0;
   g.prefix[0].setZero();
   // The angular step comes from the bearings (unit rays), which range noise does not inflate;
   // squared steps have the same median, without a square root per point.
-  std::vector<double> squared_steps;
-  squared_steps.reserve(P.size());
+  thread_local std::vector<double> squared_steps;
+  squared_steps.clear();
   Eigen::Vector3d bearing_before = Eigen::Vector3d::Zero(), turn_before = Eigen::Vector3d::Zero();
   for (int j = 0; j < n; ++j) {
     g.sq_norm[j] = P[j].squaredNorm();
@@ -102,11 +108,10 @@ LineGeometry lineGeometry(const std::vector<Eigen::Vector3d>& P, double continui
     bearing_before = bearing;
     turn_before = turn;
   }
-  if (squared_steps.empty()) return g;
+  if (squared_steps.empty()) return;
   const auto middle = squared_steps.begin() + static_cast<std::ptrdiff_t>(squared_steps.size() / 2);
   std::nth_element(squared_steps.begin(), middle, squared_steps.end());
   g.step_rad = std::max(std::sqrt(*middle), 1e-6);
-  return g;
 }
 
 // Features of one ordered scan line. Neighbours are taken every `stride` points, the stride
@@ -118,7 +123,9 @@ void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConf
                  std::vector<std::size_t>* edges, std::vector<std::size_t>* planes) {
   const int n = static_cast<int>(P.size());
   if (n < 2 * K + 1) return;
-  const LineGeometry g = lineGeometry(P, cfg.continuity_jump_m);
+  thread_local LineGeometry scratch;
+  lineGeometry(P, cfg.continuity_jump_m, &scratch);
+  const LineGeometry& g = scratch;
   if (g.step_rad <= 0.0) return;
   const int max_stride = std::max(1, cfg.max_stride);
   // A neighbour `stride` points away lies about stride * step_rad * range away.
