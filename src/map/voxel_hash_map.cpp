@@ -204,11 +204,12 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
     gaps.resize(3 * static_cast<std::size_t>(side));
     brick_of.resize(3 * static_cast<std::size_t>(side));
     const int cell[3] = {c.x, c.y, c.z};
+    int first_brick[3];
     double to_own_faces = voxel_m_;  // q's distance to the nearest face of its own voxel
     for (int a = 0; a < 3; ++a) {
       const double lower = cell[a] * voxel_m_;
       to_own_faces = std::min({to_own_faces, q[a] - lower, lower + voxel_m_ - q[a]});
-      const int first_brick = (cell[a] - max_ring) >> kBrickShift;
+      first_brick[a] = (cell[a] - max_ring) >> kBrickShift;
       for (int offset = -max_ring; offset <= max_ring; ++offset) {
         double gap = 0.0;
         if (offset != 0) {
@@ -218,7 +219,7 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
         }
         const std::size_t at = static_cast<std::size_t>(a * side + offset + max_ring);
         gaps[at] = gap;
-        brick_of[at] = ((cell[a] + offset) >> kBrickShift) - first_brick;
+        brick_of[at] = ((cell[a] + offset) >> kBrickShift) - first_brick[a];
       }
     }
     to_own_faces = std::max(to_own_faces, 0.0);
@@ -235,13 +236,11 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
     const auto n_bricks = static_cast<std::size_t>(bricks_per_axis * bricks_per_axis * bricks_per_axis);
     bricks.resize(n_bricks);
     looked_up.assign(n_bricks, 0);
-    const int first_bx = (c.x - max_ring) >> kBrickShift, first_by = (c.y - max_ring) >> kBrickShift,
-              first_bz = (c.z - max_ring) >> kBrickShift;
     const auto brickAt = [&](int ix, int iy, int iz) {
       const auto at = static_cast<std::size_t>((ix * bricks_per_axis + iy) * bricks_per_axis + iz);
       if (!looked_up[at]) {
         looked_up[at] = 1;
-        const std::uint32_t b = brick_index_.find(packVoxelKey(first_bx + ix, first_by + iy, first_bz + iz));
+        const std::uint32_t b = brick_index_.find(packVoxelKey(first_brick[0] + ix, first_brick[1] + iy, first_brick[2] + iz));
         bricks[at] = b == kNone ? nullptr : &bricks_[b];
       }
       return bricks[at];
