@@ -150,3 +150,40 @@ TEST(SweepAligner, WhenTheReferenceComesBackItsSweepsDefineTheWindowsAgain) {
   EXPECT_EQ(last.scans.front().sensor, "velodyne");
   EXPECT_EQ(last.scans.front().points.size(), 1000u);
 }
+
+TEST(SweepAligner, PointsArrivingAfterTheirWindowWasCutAreCountedAsDroppedAndTheRestDeliveredInOrder) {
+  float tag = 0;
+  SweepAligner aligner({"velodyne", 0.3, 0.5});
+  Collected c;
+  AlignedSweep sw;
+  const auto feed = [&](const LidarScan& f) {
+    aligner.add(f);
+    while (aligner.pop(&sw)) collect(sw, &c);
+  };
+  for (int k = 0; k < 8; ++k) {
+    feed(makeFrame("livox", 1.0 + 0.1 * k, 200, 0.1, &tag));
+    feed(makeFrame("velodyne", 1.0 + 0.1 * k, 100, 0.1, &tag));
+  }
+  ASSERT_GE(c.sweeps.size(), 3u);
+  const Stamp cut_until = c.sweeps.back().end_ns;
+  // A frame delivered late: its first 51 points belong to windows already cut, the other 49 to
+  // the next one, among the queued points of the same LiDAR.
+  const LidarScan late = makeFrame("livox", toSec(cut_until) - 0.0505, 100, 0.1, &tag);
+  feed(late);
+  for (int k = 8; k < 12; ++k) {
+    feed(makeFrame("livox", 1.0 + 0.1 * k, 200, 0.1, &tag));
+    feed(makeFrame("velodyne", 1.0 + 0.1 * k, 100, 0.1, &tag));
+  }
+  for (const auto& s : aligner.flush()) collect(s, &c);
+
+  EXPECT_EQ(c.duplicates, 0);
+  EXPECT_EQ(aligner.droppedPoints(), 51u);
+  for (std::size_t i = 0; i < late.points.size(); ++i) {
+    const bool on_time = late.start_ns + fromSec(late.points[i].time_s) >= cut_until;
+    EXPECT_EQ(c.seen.count(late.points[i].intensity), on_time ? 1u : 0u) << "point " << i;
+  }
+  for (const auto& s : c.sweeps)
+    for (const auto& scan : s.scans)
+      EXPECT_TRUE(std::is_sorted(scan.points.begin(), scan.points.end(),
+                                 [](const Point& a, const Point& b) { return a.time_s < b.time_s; }));
+}
