@@ -70,7 +70,7 @@ void bindOdometry(YamlBinder& b, estimator::OdometryConfig& c) {
           "keyframes' window and the map use all");
   b.field("registration_max_planes", c.registration_max_planes,
           "... and at most this many plane features (0: all). 3000 makes a 60 m hall's run ~25 % cheaper and its "
-          "ATE 8-16 % worse (README, Speed)");
+          "ATE 8-16 % worse (docs/speed_history.md)");
   b.choice("surface_points", c.surface_points,
            {{SurfacePoints::kSolidState, "solid_state"}, {SurfacePoints::kAll, "all"}, {SurfacePoints::kNone, "none"}},
            "LiDARs whose every return (not only scan-line plane features) is matched point-to-plane, the map's "
@@ -84,7 +84,7 @@ void bindOdometry(YamlBinder& b, estimator::OdometryConfig& c) {
   b.field("voxel_planes", c.voxel_planes,
           "a plane feature in a planar cell of the local map (10+ points within 5 cm of one plane) matches "
           "that plane instead of a plane fitted to its 5 nearest map points: same accuracy, hall run 11-17 % "
-          "cheaper (README, Speed)");
+          "cheaper (docs/speed_history.md)");
   b.field("local_map_radius_m", c.local_map_radius_m, "local map kept around the current pose, m");
   b.field("window_size", c.window_size, "keyframes in the sliding window");
   b.field("keyframe_rotation_deg", c.keyframe_rotation_deg, "new keyframe after this rotation, deg");

@@ -52,7 +52,7 @@ class LoopCloser {
     double min_translation_eigenvalue = 0.08;
     // Distance candidates whose geometry at the prior gives less than this fraction of
     // min_translation_eigenvalue are rejected before the ICP (0: never). The alignment changes it
-    // by a few percent (README, Speed), so only clear cases are cut short.
+    // by a few percent (docs/speed_history.md), so only clear cases are cut short.
     double prior_eigenvalue_fraction = 0.67;
     double max_correction_m = 5.0;      // distance candidates: ICP may move the prior at most this ...
     double max_correction_deg = 30.0;   // ... and rotate it at most this

@@ -42,7 +42,7 @@ struct OdometryConfig {
   double edge_voxel_m = 0.2;            // downsampling of merged edge features
   double plane_voxel_m = 0.3;           // downsampling of merged plane features
   // Registration of a sweep matches at most this many features (thinned on a coarser grid; 0: all);
-  // keyframes' window optimisation and the map use all. Off by default: it costs accuracy (README, Speed).
+  // keyframes' window optimisation and the map use all. Off by default: it costs accuracy (docs/speed_history.md).
   int registration_max_edges = 0;
   int registration_max_planes = 0;
   SurfacePoints surface_points = SurfacePoints::kSolidState;
