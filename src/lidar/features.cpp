@@ -69,7 +69,7 @@ struct LineGeometry {
   bool continuous(int a, int b) const { return gaps_before[b] == gaps_before[a]; }  // a <= b
 };
 
-// Fills *g (storage reused from line to line: every element read is written here).
+// Fills *out (storage reused from line to line: every element read later is written here).
 void lineGeometry(const std::vector<Eigen::Vector3d>& P, double continuity_jump_m, LineGeometry* out) {
   const int n = static_cast<int>(P.size());
   LineGeometry& g = *out;

@@ -1,6 +1,5 @@
 #include "mmlio/map/kd_tree.hpp"
 
-
 #include "mmlio/core/flat_key_index.hpp"
 #include "mmlio/core/voxel_key.hpp"
 

@@ -240,7 +240,8 @@ int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
       const auto at = static_cast<std::size_t>((ix * bricks_per_axis + iy) * bricks_per_axis + iz);
       if (!looked_up[at]) {
         looked_up[at] = 1;
-        const std::uint32_t b = brick_index_.find(packVoxelKey(first_brick[0] + ix, first_brick[1] + iy, first_brick[2] + iz));
+        const std::uint32_t b =
+            brick_index_.find(packVoxelKey(first_brick[0] + ix, first_brick[1] + iy, first_brick[2] + iz));
         bricks[at] = b == kNone ? nullptr : &bricks_[b];
       }
       return bricks[at];
