@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Speed reference: FAST-LIO2 (VI: the spinning LiDAR + the IMU) next to mmlio (HVI, loop closure)
+# Speed reference: FAST-LIO2 (VI: the spinning LiDAR + the IMU) next to mmlio (HVI by default, loops)
 # on the same simulated bags, each pinned to one core, in the same hour. Prints per bag the CPU
 # seconds of the whole run and the ATE of both.
 #
@@ -8,6 +8,8 @@
 #   RATE=10      rosbag play rate for FAST-LIO2 (fed through roscore; it queues what it cannot
 #                process at once, so nothing is lost, and CPU time, not wall time, is compared)
 #   MMLIO=build/mmlio   the mmlio binary
+#   MMLIO_CONFIG=FILE   mmlio's rig config (default: built-in, HVI); config/vi.yaml compares the same
+#                       sensors as FAST-LIO2 (the spinning LiDAR and the IMU)
 #   FASTLIO_SRC=DIR     a FAST_LIO checkout with its ikd-Tree submodule (default: cloned into
 #                       build/fastlio at the commits below)
 #
@@ -17,6 +19,11 @@
 # its mapping_velodyne.launch defaults (0.5 m scan and map voxels, 4th point, 3 iterations).
 # Measured in the README (Speed).
 set -euo pipefail
+# Paths given relative to where it was started from, before it moves to the repository's root.
+[ -n "${MMLIO:-}" ] && MMLIO=$(realpath "$MMLIO")
+MMLIO_CONFIG=$([ -n "${MMLIO_CONFIG:-}" ] && realpath "$MMLIO_CONFIG" || true)
+dirs=()
+for d in "$@"; do dirs+=("$(realpath "$d")"); done
 cd "$(dirname "$0")/../.."
 ROOT=$(pwd)
 RATE="${RATE:-10}"
@@ -130,11 +137,12 @@ ate_cm() {
     /usr/bin/python3 -c 'import json, sys; print("%.2f" % (100 * json.load(sys.stdin)["ate_rmse_m"]))'
 }
 
-[ $# -gt 0 ] || { sed -n '2,8p' "$0"; exit 2; }
+[ $# -gt 0 ] || { sed -n '2,14p' "$0"; exit 2; }
 [ -x "$BIN" ] || build
-echo "| bag | FAST-LIO2 VI: CPU s, ATE cm | mmlio HVI + loops: CPU s, ATE cm (odometry) | CPU ratio |"
+mode=$(basename "${MMLIO_CONFIG:-hvi}" .yaml | tr '[:lower:]' '[:upper:]')
+echo "| bag | FAST-LIO2 VI: CPU s, ATE cm | mmlio $mode + loops: CPU s, ATE cm (odometry) | CPU ratio |"
 echo "|---|---|---|---|"
-for dir in "$@"; do
+for dir in "${dirs[@]}"; do
   bag=$(ls "$dir"/*.bag); gt=$(ls "$dir"/*_gt.tum); truth=$(ls "$dir"/*_truth.yaml)
   out="$WORK/runs/$(basename "$dir")"
   rm -rf "$out"; mkdir -p "$out"
@@ -142,8 +150,10 @@ for dir in "$@"; do
   fl_cpu=$(run_fastlio "$bag" "$out/fastlio.yaml" "$out")
   odom_to_tum "$out/odom.bag" "$out/fastlio.tum"
   fl_ate=$(ate_cm "$gt" "$out/fastlio.tum")
-  mm_cpu=$(taskset -c 1 "$MMLIO" bench "$bag" --calib "$truth" 2>&1 | sed -n 's/.*CPU \([0-9.]*\) s.*/\1/p' | head -1)
-  "$MMLIO" run "$bag" --calib "$truth" --no-progress --out "$out/mmlio" >/dev/null 2>&1
+  mm_cfg=()
+  [ -n "$MMLIO_CONFIG" ] && mm_cfg=(--config "$MMLIO_CONFIG")
+  mm_cpu=$(taskset -c 1 "$MMLIO" bench "$bag" "${mm_cfg[@]}" --calib "$truth" 2>&1 | sed -n 's/.*CPU \([0-9.]*\) s.*/\1/p' | head -1)
+  "$MMLIO" run "$bag" "${mm_cfg[@]}" --calib "$truth" --no-progress --out "$out/mmlio" >/dev/null 2>&1
   mm_ate=$(ate_cm "$gt" "$out/mmlio/trajectory_odometry.tum")
   echo "| $(basename "$dir") | $fl_cpu, $fl_ate | $mm_cpu, $mm_ate | $(/usr/bin/python3 -c "print(f'{$mm_cpu / $fl_cpu:.2f}')") |"
 done
