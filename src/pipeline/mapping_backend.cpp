@@ -59,13 +59,9 @@ void MappingBackend::tryLoop(int k) {
                Eigen::AngleAxisd(d.rotation()).angle() * Eigen::AngleAxisd(d.rotation()).axis().transpose(), ") rad");
     graph_.addLoop(r.match, r.query, r.T_match_query, r.information);
     graph_.optimize();
-    Json loop = Json::object();
     const Stamp t0 = graph_.node(0).stamp_ns;  // seconds since the first keyframe: readable
-    loop["query_s"] = toSec(graph_.node(r.query).stamp_ns - t0);
-    loop["match_s"] = toSec(graph_.node(r.match).stamp_ns - t0);
-    loop["fitness_m"] = r.fitness_m;
-    loop["overlap"] = r.overlap;
-    loops_.push_back(loop);
+    loops_.push_back({toSec(graph_.node(r.query).stamp_ns - t0), toSec(graph_.node(r.match).stamp_ns - t0),
+                      r.fitness_m, r.overlap});
     log::emit(log::Level::kInfo, "loop closed: keyframe ", r.query, " -> ", r.match, " (fitness ", r.fitness_m,
               " m, overlap ", r.overlap, ")");
   } else if (r.candidates_tried > 0) {
@@ -365,15 +361,8 @@ std::vector<std::string> MappingBackend::lidarNames() const {
 std::size_t MappingBackend::keyframes() const { return graph_.size(); }
 std::size_t MappingBackend::loops() const { return graph_.loops(); }
 
-Json MappingBackend::toJson() const {
-  Json j = Json::object();
-  j["enabled"] = cfg_.loop_enabled;
-  j["keyframes"] = graph_.size();
-  j["loop_attempts"] = loop_attempts_;
-  j["loops_accepted"] = graph_.loops();
-  j["candidates_rejected"] = rejected_;
-  j["loops"] = loops_;
-  return j;
+LoopFigures MappingBackend::loopFigures() const {
+  return {cfg_.loop_enabled, graph_.size(), loop_attempts_, graph_.loops(), rejected_, loops_};
 }
 
 }  // namespace mmlio::pipeline

@@ -152,7 +152,17 @@ Json toJson(const RunReport& r) {
   rep["timing"] = r.timing.toJson();
   rep["wall_time_s"] = r.wall_time_s;
   rep["realtime_factor"] = r.realtime_factor;
-  rep["mapping"] = r.mapping;
+  Json& mapping = rep["mapping"];
+  mapping = {{"enabled", r.mapping.enabled},
+             {"keyframes", r.mapping.keyframes},
+             {"loop_attempts", r.mapping.attempts},
+             {"loops_accepted", r.mapping.accepted},
+             {"candidates_rejected", r.mapping.candidates_rejected},
+             {"loops", Json::array()}};
+  for (const ClosedLoop& l : r.mapping.loops)
+    mapping["loops"].push_back(
+        {{"query_s", l.query_s}, {"match_s", l.match_s}, {"fitness_m", l.fitness_m}, {"overlap", l.overlap}});
+  if (!r.mapping_error.empty()) mapping["error"] = r.mapping_error;
   rep["timing_backend"] = r.timing_backend.toJson();
 
   const RunReport::Dynamic& d = r.dynamic;

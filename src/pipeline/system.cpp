@@ -111,11 +111,11 @@ RunReport System::report() const {
   r.realtime_factor = r.wall_time_s > 0 ? sensor_s / r.wall_time_s : 0.0;
   r.dynamic = dynamic_;
   mapping_.read([&r](const MappingBackend& b) {
-    r.mapping = b.toJson();
+    r.mapping = b.loopFigures();
     r.dynamic.map_points_judged = b.ghostRemoval().judged_points;
     r.dynamic.map_points_removed = b.ghostRemoval().removed_points;
   });
-  if (!backend_error_.empty()) r.mapping["error"] = backend_error_;
+  r.mapping_error = backend_error_;
   return r;
 }
 

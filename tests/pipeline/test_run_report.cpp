@@ -69,5 +69,33 @@ TEST(RunReport, MarkdownShowsEveryFieldWithItsValue) {
   EXPECT_NE(md.find("| livox | 2 | 0 | 15 | 0 | 0 |"), std::string::npos);
 }
 
+
+TEST(RunReport, MappingStatesLoopClosureAndABackEndFailure) {
+  RunReport r = sampleReport();
+  r.mapping.enabled = true;
+  r.mapping.keyframes = 43;
+  r.mapping.attempts = 11;
+  r.mapping.accepted = 1;
+  r.mapping.candidates_rejected = 2;
+  r.mapping.loops.push_back({40.5, 1.25, 0.031, 0.82});
+  Json j = toJson(r);
+  const Json& m = j["mapping"];
+  EXPECT_EQ(m["enabled"], true);
+  EXPECT_EQ(m["keyframes"], 43);
+  EXPECT_EQ(m["loop_attempts"], 11);
+  EXPECT_EQ(m["loops_accepted"], 1);
+  EXPECT_EQ(m["candidates_rejected"], 2);
+  ASSERT_EQ(m["loops"].size(), 1u);
+  EXPECT_EQ(m["loops"][0]["query_s"], 40.5);
+  EXPECT_EQ(m["loops"][0]["match_s"], 1.25);
+  EXPECT_EQ(m["loops"][0]["fitness_m"], 0.031);
+  EXPECT_EQ(m["loops"][0]["overlap"], 0.82);
+  EXPECT_FALSE(m.contains("error"));
+  r.mapping_error = "out of memory";
+  j = toJson(r);
+  EXPECT_EQ(j["mapping"]["error"], "out of memory");
+  EXPECT_NE(toMarkdown(r).find("out of memory"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace mmlio::pipeline

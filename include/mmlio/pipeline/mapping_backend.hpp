@@ -13,7 +13,7 @@
 #include "mmlio/backend/pose_graph.hpp"
 #include "mmlio/core/flat_key_index.hpp"
 #include "mmlio/estimator/odometry.hpp"
-#include "mmlio/pipeline/json.hpp"
+#include "mmlio/pipeline/loop_figures.hpp"
 #include "mmlio/pipeline/map_accumulator.hpp"
 
 namespace mmlio::pipeline {
@@ -60,8 +60,7 @@ class MappingBackend {
   std::vector<Point> lidarMap(const std::string& lidar) const;
   std::size_t keyframes() const;
   std::size_t loops() const;
-  /// {keyframes, loop_attempts, loops: [{query_s, match_s, fitness_m, overlap}], rejected}
-  Json toJson() const;
+  LoopFigures loopFigures() const;
 
  private:
   bool plausibleCorrection(const backend::LoopResult& r) const;
@@ -100,7 +99,7 @@ class MappingBackend {
   Eigen::Isometry3d T_world_keyframe_ = Eigen::Isometry3d::Identity();
   std::size_t loop_attempts_ = 0;
   int last_checked_ = -1;
-  Json loops_ = Json::array();
+  std::vector<ClosedLoop> loops_;
   std::size_t rejected_ = 0;
   std::size_t sweeps_ = 0;
   std::vector<Point> strided_;  // scratch
