@@ -9,38 +9,14 @@
 #include <random>
 #include <vector>
 
+#include "../common/box_scene.hpp"
+
 namespace mmlio::backend::testing {
 
-struct Box {
-  Eigen::Vector3d lo, hi;
-};
-using Scene = std::vector<Box>;
-
-inline Eigen::Isometry3d pose(double x, double y, double z, double yaw_rad, double roll_rad = 0, double pitch_rad = 0) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = (Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitY()) *
-                Eigen::AngleAxisd(roll_rad, Eigen::Vector3d::UnitX()))
-                   .toRotationMatrix();
-  T.translation() = Eigen::Vector3d(x, y, z);
-  return T;
-}
-
-/// Distance along the ray o + t d to box b (t > 0), or +inf.
-inline double rayBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Box& b) {
-  double t0 = 0, t1 = std::numeric_limits<double>::infinity();
-  for (int a = 0; a < 3; ++a) {
-    if (std::abs(d[a]) < 1e-12) {
-      if (o[a] < b.lo[a] || o[a] > b.hi[a]) return std::numeric_limits<double>::infinity();
-      continue;
-    }
-    double ta = (b.lo[a] - o[a]) / d[a], tb = (b.hi[a] - o[a]) / d[a];
-    if (ta > tb) std::swap(ta, tb);
-    t0 = std::max(t0, ta);
-    t1 = std::min(t1, tb);
-    if (t0 > t1) return std::numeric_limits<double>::infinity();
-  }
-  return t0 > 1e-9 ? t0 : std::numeric_limits<double>::infinity();
-}
+using mmlio::box_scene::Box;
+using mmlio::box_scene::castRay;
+using mmlio::box_scene::pose;
+using mmlio::box_scene::Scene;
 
 /// A ray-cast scan from T_world_body: `rings` beams between +-fov_deg/2 elevation, `columns`
 /// azimuths, returns within max_range_m, Gaussian range noise. Points in the body frame.
@@ -59,8 +35,7 @@ inline std::vector<Eigen::Vector3d> scan(const Scene& scene, const Eigen::Isomet
       const double az = 2 * M_PI * (c + az_offset) / columns;
       const Eigen::Vector3d d_body(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
       const Eigen::Vector3d d = T_world_body.linear() * d_body;
-      double t = std::numeric_limits<double>::infinity();
-      for (const Box& b : scene) t = std::min(t, rayBox(o, d, b));
+      const double t = castRay(scene, o, d);
       if (t > max_range_m) continue;
       out.push_back(d_body * (t + noise(rng)));
     }

@@ -17,7 +17,7 @@ double angleOf(const Eigen::Isometry3d& T) { return Eigen::AngleAxisd(T.rotation
 TEST(PointToPlaneIcp, RecoversAKnownOffsetBetweenTwoScansOfARoom) {
   const auto scene = testing::roomA();
   const Eigen::Isometry3d T_world_a = pose(-1.0, 0.5, 1.0, 0.2);
-  const Eigen::Isometry3d T_a_b = pose(0.6, -0.4, 0.05, 6 * kDeg, 1 * kDeg, -0.5 * kDeg);
+  const Eigen::Isometry3d T_a_b = pose(0.6, -0.4, 0.05, 6 * kDeg, -0.5 * kDeg, 1 * kDeg);
   const auto cloud_a = testing::scan(scene, T_world_a, 1);
   const auto cloud_b = testing::scan(scene, T_world_a * T_a_b, 2);
   const IcpTarget target(map::voxelCentroids(cloud_a, 0.1));
@@ -37,7 +37,7 @@ TEST(PointToPlaneIcp, RecoversAKnownOffsetBetweenTwoScansOfARoom) {
 TEST(PointToPlaneIcp, TwoThousandSpreadOutSourcePointsAlignAsWellAsAll) {
   const auto scene = testing::roomA();
   const Eigen::Isometry3d T_world_a = pose(-1.0, 0.5, 1.0, 0.2);
-  const Eigen::Isometry3d T_a_b = pose(0.6, -0.4, 0.05, 6 * kDeg, 1 * kDeg, -0.5 * kDeg);
+  const Eigen::Isometry3d T_a_b = pose(0.6, -0.4, 0.05, 6 * kDeg, -0.5 * kDeg, 1 * kDeg);
   const IcpTarget target(map::voxelCentroids(testing::scan(scene, T_world_a, 1), 0.1));
   const auto cloud_b = testing::scan(scene, T_world_a * T_a_b, 2);
   IcpConfig capped;

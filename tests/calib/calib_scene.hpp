@@ -10,47 +10,17 @@
 #include <random>
 #include <vector>
 
+#include "../common/box_scene.hpp"
 #include "mmlio/core/types.hpp"
 
 namespace mmlio::calib::testing {
 
 constexpr double kDeg = M_PI / 180.0;
 
-struct Box {
-  Eigen::Vector3d lo, hi;
-};
-using Scene = std::vector<Box>;
-
-inline Eigen::Isometry3d pose(double x, double y, double z, double yaw, double pitch = 0, double roll = 0) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
-                Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
-                   .toRotationMatrix();
-  T.translation() = Eigen::Vector3d(x, y, z);
-  return T;
-}
-
-inline double rayBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Box& b) {
-  double t0 = 0, t1 = std::numeric_limits<double>::infinity();
-  for (int a = 0; a < 3; ++a) {
-    if (std::abs(d[a]) < 1e-12) {
-      if (o[a] < b.lo[a] || o[a] > b.hi[a]) return std::numeric_limits<double>::infinity();
-      continue;
-    }
-    double ta = (b.lo[a] - o[a]) / d[a], tb = (b.hi[a] - o[a]) / d[a];
-    if (ta > tb) std::swap(ta, tb);
-    t0 = std::max(t0, ta);
-    t1 = std::min(t1, tb);
-    if (t0 > t1) return std::numeric_limits<double>::infinity();
-  }
-  return t0 > 1e-9 ? t0 : std::numeric_limits<double>::infinity();
-}
-
-inline double castRay(const Scene& s, const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
-  double t = std::numeric_limits<double>::infinity();
-  for (const Box& b : s) t = std::min(t, rayBox(o, d, b));
-  return t;
-}
+using mmlio::box_scene::Box;
+using mmlio::box_scene::castRay;
+using mmlio::box_scene::pose;
+using mmlio::box_scene::Scene;
 
 /// A 10 x 7 x 3 m office: shell, desks, cabinets, a pillar, boxes on the floor (no symmetry).
 inline Scene office() {

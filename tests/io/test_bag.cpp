@@ -16,6 +16,7 @@
 #include "mmlio/io/bag_info.hpp"
 #include "mmlio/io/bag_source.hpp"
 #include "mmlio/io/bag_writer.hpp"
+#include "error_of.hpp"
 
 namespace mmlio::io {
 namespace {
@@ -237,15 +238,6 @@ TEST(BagSource, ADamagedCloudAfterGoodOnesIsSkippedAndCountedAndReadingGoesOn) {
   EXPECT_EQ(starts[1], kT0 + 200'000'000LL + 1000);
   EXPECT_EQ(src.skippedMessages(), 2u);  // the foreign message and the damaged cloud
   EXPECT_FALSE(src.truncated());
-}
-
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
 }
 
 TEST(BagSourceErrors, MissingFileNotABagAndTruncatedBagAreOneLineErrors) {

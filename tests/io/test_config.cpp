@@ -12,6 +12,7 @@
 #include "mmlio/io/calib_file.hpp"
 #include "mmlio/io/rig_config.hpp"
 #include "mmlio/io/yaml_binder.hpp"
+#include "error_of.hpp"
 
 namespace fs = std::filesystem;
 using namespace mmlio;
@@ -20,15 +21,6 @@ using namespace mmlio::io;
 namespace {
 
 const std::string kConfigDir = std::string(MMLIO_SOURCE_DIR) + "/config";
-
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "<no mmlio::Error thrown>";
-}
 
 #define EXPECT_ERROR_CONTAINS(statement, text)                              \
   do {                                                                      \

@@ -15,6 +15,7 @@
 #include "mmlio/core/error.hpp"
 #include "mmlio/io/pcd_io.hpp"
 #include "mmlio/io/trajectory_writer.hpp"
+#include "error_of.hpp"
 
 namespace fs = std::filesystem;
 using namespace mmlio;
@@ -55,15 +56,6 @@ Trajectory sampleTrajectory() {
     t.push_back(p);
   }
   return t;
-}
-
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "<no mmlio::Error thrown>";
 }
 
 }  // namespace

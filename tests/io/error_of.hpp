@@ -1,0 +1,20 @@
+#pragma once
+// Test helper: the one-line message of the mmlio::Error that f throws, or a text saying none was
+// thrown (which no test expects to find its words in).
+#include <functional>
+#include <string>
+
+#include "mmlio/core/error.hpp"
+
+namespace mmlio::io {
+
+inline std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "<no mmlio::Error thrown>";
+}
+
+}  // namespace mmlio::io
