@@ -376,7 +376,7 @@ struct Odometry::Impl {
   }
 
   // ---- stage: returns on things that moved in (space an earlier sweep saw through) ----
-  void rejectMovedIn(Features* f, const Eigen::Isometry3d& T_world_body, Stamp now, SweepResult* out) {
+  void rejectMovedIn(Features* f, const Eigen::Isometry3d& T_world_body, Stamp now, SweepResult* out) const {
     std::vector<Eigen::Vector3d> world;
     world.reserve(f->edges.size() + f->planes.size());
     for (const auto& p : f->edges) world.push_back(T_world_body * p);

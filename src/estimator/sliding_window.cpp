@@ -118,8 +118,11 @@ void SlidingWindow::marginalizeOldest(const map::VoxelHashMap& edge_map, const m
     std::vector<int> drop;
     for (std::size_t i = 0; i < prior_blocks_.size(); ++i)
       if (prior_blocks_[i] == old.x.pose || prior_blocks_[i] == old.x.speed_bias) drop.push_back(static_cast<int>(i));
+    // MarginalizationInfo owns the factors and losses it is given, as Ceres' Problem does.
+    // NOLINTNEXTLINE(clang-analyzer-cplusplus.NewDeleteLeaks)
     info->addResidualBlock({new MarginalizationFactor(prior_), nullptr, prior_blocks_, drop});
   }
+  // NOLINTNEXTLINE(clang-analyzer-cplusplus.NewDeleteLeaks): owned by info
   info->addResidualBlock({new ImuFactor(next.pre, g_world_), nullptr,
                           {old.x.pose, old.x.speed_bias, next.x.pose, next.x.speed_bias}, {0, 1}});
   const double w = 1.0 / cfg_.lidar_sigma_m;
@@ -130,6 +133,7 @@ void SlidingWindow::marginalizeOldest(const map::VoxelHashMap& edge_map, const m
     loss_used = true;
   }
   if (!loss_used) delete loss;
+  // NOLINTNEXTLINE(clang-analyzer-cplusplus.NewDeleteLeaks): the loss is owned by info once used
   info->preMarginalize();
   info->marginalize();
   std::unordered_map<long, double*> same_address;

@@ -220,15 +220,15 @@ LidarScan decodePointCloud2(const sensor_msgs::PointCloud2& msg, const CloudDeco
       double tv = 0.0;
       if (time_kind != TimeKind::kAzimuth) tv = ft(p);
       if (!keepPoint(xyz, tv, o, local)) continue;
-      Stamp t_ns = header_ns;
-      switch (time_kind) {
-        case TimeKind::kRelativeS:
-        case TimeKind::kAbsoluteS:
-          t_ns = std::abs(tv) > kAbsoluteTimeS ? fromSec(tv) : header_ns + fromSec(tv);
-          break;
-        case TimeKind::kRelativeNs: t_ns = header_ns + static_cast<Stamp>(std::llround(tv)); break;
-        case TimeKind::kAzimuth: t_ns = header_ns + fromSec(clock.timeS(xyz)); break;
-      }
+      const Stamp t_ns = [&]() -> Stamp {
+        switch (time_kind) {
+          case TimeKind::kRelativeS:
+          case TimeKind::kAbsoluteS: return std::abs(tv) > kAbsoluteTimeS ? fromSec(tv) : header_ns + fromSec(tv);
+          case TimeKind::kRelativeNs: return header_ns + static_cast<Stamp>(std::llround(tv));
+          case TimeKind::kAzimuth: break;
+        }
+        return header_ns + fromSec(clock.timeS(xyz));
+      }();
       TimedPoint tp{t_ns, Point{}};
       tp.p.xyz = xyz;
       tp.p.intensity = fi.present ? static_cast<float>(fi(p)) : 0.f;

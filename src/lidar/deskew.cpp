@@ -23,7 +23,7 @@ Eigen::Isometry3d se3Exp(const Eigen::Vector3d& v, const Eigen::Vector3d& w) {
   return T;
 }
 
-SweepMotion::SweepMotion(std::vector<double> times_s, std::vector<Eigen::Isometry3d> T_end_t)
+SweepMotion::SweepMotion(std::vector<double> times_s, const std::vector<Eigen::Isometry3d>& T_end_t)
     : times_s_(std::move(times_s)) {
   if (times_s_.size() != T_end_t.size()) throw std::invalid_argument("SweepMotion: times and poses differ in size");
   if (!std::is_sorted(times_s_.begin(), times_s_.end())) throw std::invalid_argument("SweepMotion: times not sorted");
@@ -31,7 +31,7 @@ SweepMotion::SweepMotion(std::vector<double> times_s, std::vector<Eigen::Isometr
   p_.reserve(T_end_t.size());
   for (const auto& T : T_end_t) {
     q_.emplace_back(Eigen::Quaterniond(T.rotation()).normalized());
-    p_.push_back(T.translation());
+    p_.emplace_back(T.translation());
   }
 }
 

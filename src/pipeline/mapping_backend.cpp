@@ -89,7 +89,7 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
     if (cfg_.loop_enabled) {
       std::vector<Eigen::Vector3d> pts;
       pts.reserve(sweep.points_body.size());
-      for (const Point& p : sweep.points_body) pts.push_back(p.xyz.cast<double>());
+      for (const Point& p : sweep.points_body) pts.emplace_back(p.xyz.cast<double>());
       node.cloud_body = map::voxelCentroids(pts, cfg_.loop_cloud_voxel_m);
     }
     const int k = graph_.addKeyframe(std::move(node));
@@ -277,7 +277,8 @@ void MappingBackend::removeGhosts(std::size_t submap) {
   if (eyes.empty()) return;
   const Eigen::Isometry3d T_world_keyframe = graph_.pose(static_cast<int>(submap));
   const double r2 = cfg_.ghost_range_m * cfg_.ghost_range_m;
-  for (auto& [lidar, points] : submaps_[submap]) {
+  for (auto& lidar_points : submaps_[submap]) {
+    std::vector<Point>& points = lidar_points.second;  // a reference the lambda below may capture (C++17)
     std::vector<std::uint8_t> ghost(points.size(), 0), judged(points.size(), 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 512), [&](const tbb::blocked_range<std::size_t>& r) {
       // A group's vote on the current point, once asked: the second, full round reuses the first's.

@@ -45,7 +45,10 @@ void System::onSweep(estimator::SweepResult r) {
   StageTimes times = r.times_ms;
   // The back end works on the sweep on its own thread: it takes it, or a copy if an observer (the
   // live node publishing the sweep's points) still needs it.
-  if (!finished_) mapping_.addSweep(observer_ ? r : std::move(r));
+  if (!finished_) {
+    if (observer_) mapping_.addSweep(r);  // a copy: the observer below still needs the sweep
+    else mapping_.addSweep(std::move(r));
+  }
   times.emplace_back("mapping_handoff", handoff.lapMs());
   timing_.add(times);
   if (observer_) observer_(r);

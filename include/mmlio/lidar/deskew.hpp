@@ -17,7 +17,7 @@ class SweepMotion {
  public:
   SweepMotion() = default;  // identity: no motion
   /// Samples at sorted times; at() interpolates between them (lerp + slerp) and clamps outside.
-  SweepMotion(std::vector<double> times_s, std::vector<Eigen::Isometry3d> T_end_t);
+  SweepMotion(std::vector<double> times_s, const std::vector<Eigen::Isometry3d>& T_end_t);
   /// Constant body-frame twist (screw motion: T_world_body(t) = T0 * Exp([v, w] t)), exact at
   /// every t: T_end_t = Exp(-[v, w] (sweep_end_s - t)).
   static SweepMotion constantTwist(const Eigen::Vector3d& v_body, const Eigen::Vector3d& w_body, double sweep_end_s);
