@@ -21,7 +21,8 @@
 set -euo pipefail
 # Paths given relative to where it was started from, before it moves to the repository's root.
 [ -n "${MMLIO:-}" ] && MMLIO=$(realpath "$MMLIO")
-MMLIO_CONFIG=$([ -n "${MMLIO_CONFIG:-}" ] && realpath "$MMLIO_CONFIG" || true)
+mm_cfg=()  # mmlio's --config, if one is given
+[ -n "${MMLIO_CONFIG:-}" ] && mm_cfg=(--config "$(realpath "$MMLIO_CONFIG")")
 dirs=()
 for d in "$@"; do dirs+=("$(realpath "$d")"); done
 cd "$(dirname "$0")/../.."
@@ -150,8 +151,6 @@ for dir in "${dirs[@]}"; do
   fl_cpu=$(run_fastlio "$bag" "$out/fastlio.yaml" "$out")
   odom_to_tum "$out/odom.bag" "$out/fastlio.tum"
   fl_ate=$(ate_cm "$gt" "$out/fastlio.tum")
-  mm_cfg=()
-  [ -n "$MMLIO_CONFIG" ] && mm_cfg=(--config "$MMLIO_CONFIG")
   mm_cpu=$(taskset -c 1 "$MMLIO" bench "$bag" "${mm_cfg[@]}" --calib "$truth" 2>&1 | sed -n 's/.*CPU \([0-9.]*\) s.*/\1/p' | head -1)
   "$MMLIO" run "$bag" "${mm_cfg[@]}" --calib "$truth" --no-progress --out "$out/mmlio" >/dev/null 2>&1
   mm_ate=$(ate_cm "$gt" "$out/mmlio/trajectory_odometry.tum")
