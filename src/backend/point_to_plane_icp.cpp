@@ -52,7 +52,7 @@ struct IcpTarget::Impl {
       cov += d * d.transpose();
     }
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
-    const Eigen::Vector3d ev = es.eigenvalues();  // ascending
+    const Eigen::Vector3d& ev = es.eigenvalues();  // ascending
     // A plane: thin (smallest << middle) and wide in its second direction too. The absolute
     // width test matters: neighbours from one scan line (or one column of rings hitting a wall
     // at grazing incidence) form a line whose range noise alone would pass a ratio test and give

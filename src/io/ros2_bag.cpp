@@ -149,6 +149,7 @@ std::unique_ptr<Ros2Bag> openRos2Bag(const std::string& path) {
       if (storage == "mcap") {
         if (files.size() == 1) return openMcap(files.front());
         std::vector<std::unique_ptr<Ros2Bag>> parts;
+        parts.reserve(files.size());
         for (const std::string& f : files) parts.push_back(openMcap(f));
         return std::make_unique<SplitBag>(std::move(parts));
       }

@@ -122,7 +122,7 @@ std::string encodeYaml(const std::vector<double>& value, int) {
 
 std::string encodeYaml(const Eigen::Isometry3d& value, int indent) {
   // One matrix row per line, continuation lines aligned under the first number.
-  const Eigen::Matrix4d m = value.matrix();
+  const Eigen::Matrix4d& m = value.matrix();
   std::string text = "[";
   for (int r = 0; r < 4; ++r) {
     if (r > 0) text += ",\n" + std::string(static_cast<std::size_t>(indent), ' ');

@@ -139,6 +139,13 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const io::RigConf
 
   // ---- spatial ----
   std::vector<Eigen::Vector3d> solid_pts, spinning_pts;
+  const auto pointsIn = [](const std::vector<LidarScan>& scans) {
+    std::size_t n = 0;
+    for (const LidarScan& s : scans) n += s.points.size();
+    return n;
+  };
+  solid_pts.reserve(pointsIn(c.solid_frames));
+  spinning_pts.reserve(pointsIn(c.spinning_rest));
   for (const LidarScan& s : c.solid_frames)
     for (const Point& p : s.points) solid_pts.push_back(p.xyz.cast<double>());
   for (const LidarScan& s : c.spinning_rest)
