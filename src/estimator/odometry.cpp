@@ -145,6 +145,7 @@ struct Odometry::Impl {
     std::vector<lidar::FeatureCloud> clouds(scans.size());
     std::vector<LidarScan> deskewed(scans.size());
     std::vector<LidarFrameStats> stats(scans.size());
+    std::vector<char> surface_points(scans.size(), 0);  // every return is matched as a plane point
     std::vector<SensorView> views(cfg.dynamic.enabled ? scans.size() : 0);
     tbb::parallel_for(std::size_t(0), scans.size(), [&](std::size_t i) {
       const LidarSetup& setup = *setupOf(scans[i]->sensor);
@@ -155,14 +156,14 @@ struct Odometry::Impl {
         views[i].image = map::RangeImage(deskewed[i].points, cfg.dynamic.image);
       }
       // Where every return is a surface point, scan-line plane features would go unused.
-      const bool surface_points = usesSurfacePoints(setup.extrinsic.name);
+      surface_points[i] = usesSurfacePoints(setup.extrinsic.name);
       lidar::FeatureConfig features = cfg.features;
-      features.planes = !surface_points;
+      features.planes = !surface_points[i];
       clouds[i] = lidar::extractFeatures(deskewed[i], setup.extrinsic.kind, setup.num_rings, features);
       stats[i].sensor = setup.extrinsic.name;
       stats[i].points = deskewed[i].points.size();
       stats[i].edges = clouds[i].edges.size();
-      stats[i].planes = surface_points ? deskewed[i].points.size() : clouds[i].planes.size();
+      stats[i].planes = surface_points[i] ? deskewed[i].points.size() : clouds[i].planes.size();
       if (setup.extrinsic.kind == LidarKind::kSolidState) {
         const lidar::BadFrameResult bad = lidar::checkSolidStateFrame(clouds[i], cfg.bad_frame);
         stats[i].bad_frame = bad.bad;
@@ -174,7 +175,7 @@ struct Odometry::Impl {
     std::size_t n_edges = 0, n_planes = 0, n_points = 0;
     for (std::size_t i = 0; i < scans.size(); ++i) {
       n_edges += clouds[i].edges.size();
-      n_planes += usesSurfacePoints(deskewed[i].sensor) ? deskewed[i].points.size() : clouds[i].planes.size();
+      n_planes += surface_points[i] ? deskewed[i].points.size() : clouds[i].planes.size();
       n_points += deskewed[i].points.size();
     }
     edges.reserve(n_edges);
@@ -195,7 +196,7 @@ struct Odometry::Impl {
       if (keep_for_judgement) edge_poor[source] = 1;
       if (!stats[i].bad_frame || keep_for_judgement) {
         toBody(clouds[i].edges, &edges);
-        toBody(usesSurfacePoints(deskewed[i].sensor) ? deskewed[i].points : clouds[i].planes, &planes);
+        toBody(surface_points[i] ? deskewed[i].points : clouds[i].planes, &planes);
       }
       if (cfg.keep_points) toBody(deskewed[i].points, &out->points_body);
     }
