@@ -173,10 +173,10 @@ struct Odometry::Impl {
 
     std::vector<Point> edges, planes;
     std::size_t n_edges = 0, n_planes = 0, n_points = 0;
-    for (std::size_t i = 0; i < scans.size(); ++i) {
-      n_edges += clouds[i].edges.size();
-      n_planes += surface_points[i] ? deskewed[i].points.size() : clouds[i].planes.size();
-      n_points += deskewed[i].points.size();
+    for (const LidarFrameStats& s : stats) {
+      n_edges += s.edges;
+      n_planes += s.planes;
+      n_points += s.points;
     }
     edges.reserve(n_edges);
     planes.reserve(n_planes);

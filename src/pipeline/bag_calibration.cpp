@@ -138,18 +138,17 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const io::RigConf
                 "the start; cut the bag to begin at rest (rosbag filter) or record a still second first");
 
   // ---- spatial ----
-  std::vector<Eigen::Vector3d> solid_pts, spinning_pts;
-  const auto pointsIn = [](const std::vector<LidarScan>& scans) {
+  const auto positionsOf = [](const std::vector<LidarScan>& scans) {
     std::size_t n = 0;
     for (const LidarScan& s : scans) n += s.points.size();
-    return n;
+    std::vector<Eigen::Vector3d> pts;
+    pts.reserve(n);
+    for (const LidarScan& s : scans)
+      for (const Point& p : s.points) pts.emplace_back(p.xyz.cast<double>());
+    return pts;
   };
-  solid_pts.reserve(pointsIn(c.solid_frames));
-  spinning_pts.reserve(pointsIn(c.spinning_rest));
-  for (const LidarScan& s : c.solid_frames)
-    for (const Point& p : s.points) solid_pts.push_back(p.xyz.cast<double>());
-  for (const LidarScan& s : c.spinning_rest)
-    for (const Point& p : s.points) spinning_pts.push_back(p.xyz.cast<double>());
+  const std::vector<Eigen::Vector3d> solid_pts = positionsOf(c.solid_frames);
+  const std::vector<Eigen::Vector3d> spinning_pts = positionsOf(c.spinning_rest);
   const Eigen::Isometry3d guess = solid->T_imu_sensor.inverse() * spinning->T_imu_sensor;
   res.spatial = calib::calibrateSpinningToSolid(spinning_pts, solid_pts, guess, opt.spatial);
   if (!res.spatial.ok) throw Error("spatial calibration refused: " + res.spatial.message);

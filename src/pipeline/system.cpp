@@ -46,7 +46,7 @@ void System::onSweep(estimator::SweepResult r) {
   // The back end works on the sweep on its own thread: it takes it, or a copy if an observer (the
   // live node publishing the sweep's points) still needs it.
   if (!finished_) {
-    if (observer_) mapping_.addSweep(r);  // a copy: the observer below still needs the sweep
+    if (observer_) mapping_.addSweep(r);
     else mapping_.addSweep(std::move(r));
   }
   times.emplace_back("mapping_handoff", handoff.lapMs());
