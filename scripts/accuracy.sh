@@ -36,8 +36,8 @@ for r in rows:
         r["scene"] = f'{r["scene"]} +{r["people"]} people'
 print("| scene | run | runs | ATE median | ATE worst | end-to-end % of path median / worst | map to surfaces median | map off surfaces median / worst | HVI <= min(VI, HI) |")
 print("|---|---|---|---|---|---|---|---|---|")
-base = ["office", "corridor", "corridor_blind", "hall"]
-scenes = sorted({r["scene"] for r in rows}, key=lambda s: (base.index(s.split()[0]) if s.split()[0] in base else 9, s))
+base = ["office", "corridor", "corridor_blind", "hall", "stairs"]
+scenes = sorted({r["scene"] for r in rows}, key=lambda s: (base.index(s.split()[0].split("+")[0]) if s.split()[0].split("+")[0] in base else 9, s))
 for sc in scenes:
     cells = {}
     for r in rows:

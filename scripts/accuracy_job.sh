@@ -7,16 +7,23 @@
 # PEOPLE=N (default 0) puts N people walking through the scene (simulate --people N); the map is then
 # also scored for what is off the static surfaces. KEEP_MAPS=1 keeps each run's maps (accuracy.sh
 # compares the maps of a cell with people against the same cell without).
+# SCENE+handheld carries the scene's route by hand (simulate --handheld).
 # Usage: scripts/accuracy_job.sh OUT SCENE SEED LEVEL [MODES...]   (modes: hvi vi hi hvi+loop)
 set -euo pipefail
 OUT="$1" SCENE="$2" SEED="$3" LEVEL="$4"
 shift 4
+CELL_SCENE="$SCENE"
+gait=()
+if [ "${SCENE%+handheld}" != "$SCENE" ]; then
+  SCENE="${SCENE%+handheld}"
+  gait=(--handheld)
+fi
 MODES=("${@:-hvi vi hi}")
 read -r -a MODES <<< "${MODES[*]}"
 MMLIO="${MMLIO:-build/mmlio}"
 CONFIG_DIR="${CONFIG_DIR:-config}"
 PEOPLE="${PEOPLE:-0}"
-cell="$SCENE-s$SEED-n$LEVEL"
+cell="$CELL_SCENE-s$SEED-n$LEVEL"
 [ "$PEOPLE" -gt 0 ] && cell="$cell-p$PEOPLE"
 dir="$OUT/$cell"
 mkdir -p "$dir"
@@ -30,7 +37,7 @@ mount=()
 imu=(--acc-noise "$(echo "0.002*$LEVEL" | bc -l)" --gyro-noise "$(echo "0.0002*$LEVEL" | bc -l)"
      --acc-walk "$(echo "0.00006*$LEVEL" | bc -l)" --gyro-walk "$(echo "0.000004*$LEVEL" | bc -l)"
      --acc-bias "$(echo "0.01*$LEVEL" | bc -l)")
-"$MMLIO" -q simulate --scenario "$SCENE" --seed "$SEED" --pattern "$pattern" "${mount[@]}" "${imu[@]}" \
+"$MMLIO" -q simulate --scenario "$SCENE" "${gait[@]}" --seed "$SEED" --pattern "$pattern" "${mount[@]}" "${imu[@]}" \
   --people "$PEOPLE" --out "$dir" \
   > "$dir/simulate.log" 2>&1
 
@@ -49,7 +56,7 @@ for run in "${MODES[@]}"; do
     ev=$("$MMLIO" evaluate --gt "$dir/${SCENE}_gt.tum" --est "$rd/trajectory.tum" --map "$rd/map.pcd" \
       "${removed[@]}" --scenario "$SCENE" --json 2>/dev/null || echo '{}')
   fi
-  python3 - "$SCENE" "$SEED" "$LEVEL" "$pattern" "$run" "$status" "$rd" "$ev" "$PEOPLE" <<'PY'
+  python3 - "$CELL_SCENE" "$SEED" "$LEVEL" "$pattern" "$run" "$status" "$rd" "$ev" "$PEOPLE" <<'PY'
 import json, os, sys
 scene, seed, level, pattern, run, status, rd, ev, people = sys.argv[1:]
 row = {"scene": scene, "seed": int(seed), "noise": int(level), "pattern": pattern, "people": int(people), "run": run,

@@ -25,21 +25,33 @@ Vec6 lerpKeyframes(const std::vector<Keyframe>& keys, double t) {
   return (1 - u) * toVec(a) + u * toVec(b);
 }
 
-struct Pose2 {
-  double x, y, yaw;
-};
-
-double legTime(const Pose2& a, const Pose2& b, const WalkConfig& c) {
-  const double dist = std::hypot(b.x - a.x, b.y - a.y);
-  return std::max({dist / c.speed_m_s, std::abs(b.yaw - a.yaw) / c.yaw_rate_rad_s, 0.2});
+// A pose of the walk: x, y, floor z, yaw, pitch, roll.
+Vec6 poseOf(const Waypoint& w) {
+  Vec6 v;
+  v << w.x_m, w.y_m, w.z_m, w.yaw_rad, w.pitch_rad, w.roll_rad;
+  return v;
 }
 
-}  // namespace
+double legTime(const Vec6& a, const Vec6& b, const WalkConfig& c) {
+  const Vec6 d = (b - a).cwiseAbs();
+  return std::max({std::hypot(std::hypot(d[0], d[1]), d[2]) / c.speed_m_s, d[2] / c.climb_rate_m_s,
+                   d[3] / c.yaw_rate_rad_s, std::max(d[4], d[5]) / c.look_rate_rad_s, 0.2});
+}
 
-std::vector<Keyframe> walkKeyframes(const std::vector<Waypoint>& waypoints, const WalkConfig& config,
-                                    double total_duration_s) {
-  std::vector<Pose2> poses;
-  for (const Waypoint& w : waypoints) poses.push_back({w.x_m, w.y_m, w.yaw_rad});
+Vec6 turnedAround(Vec6 v) {
+  v[3] += M_PI;
+  return v;
+}
+
+// The walk's piecewise-linear path (rest, legs, rest) and when it moves.
+struct PlannedWalk {
+  std::vector<Keyframe> coarse;  // at the waypoints, starting at move_start_s
+  double move_start_s = 0.0, move_end_s = 0.0, end_s = 0.0;
+};
+
+PlannedWalk planWalk(const std::vector<Waypoint>& waypoints, const WalkConfig& config, double total_duration_s) {
+  std::vector<Vec6> poses;
+  for (const Waypoint& w : waypoints) poses.push_back(poseOf(w));
   std::vector<double> leg;
   double full_s = 0.0;
   for (size_t i = 1; i < poses.size(); ++i) {
@@ -55,30 +67,25 @@ std::vector<Keyframe> walkKeyframes(const std::vector<Waypoint>& waypoints, cons
       // Out and back along a prefix: two half turns of pi at the far end and at the start.
       const double turn_s = M_PI / config.yaw_rate_rad_s;
       double prefix_s = 0.5 * (available_s - 2.0 * turn_s);
-      std::vector<Pose2> out{poses.front()};
+      std::vector<Vec6> out{poses.front()};
       std::vector<double> out_leg;
       for (size_t i = 0; i < leg.size() && prefix_s > 1e-6; ++i) {
         const double dt = std::min(prefix_s, leg[i]);
         const double u = dt / leg[i];
-        out.push_back({poses[i].x + u * (poses[i + 1].x - poses[i].x), poses[i].y + u * (poses[i + 1].y - poses[i].y),
-                       poses[i].yaw + u * (poses[i + 1].yaw - poses[i].yaw)});
+        out.push_back(poses[i] + u * (poses[i + 1] - poses[i]));
         out_leg.push_back(dt);
         prefix_s -= dt;
       }
-      std::vector<Pose2> walk = out;
+      std::vector<Vec6> walk = out;
       std::vector<double> walk_leg = out_leg;
       if (out.size() > 1) {
-        Pose2 far = out.back();
-        far.yaw += M_PI;
-        walk.push_back(far);
+        walk.push_back(turnedAround(out.back()));
         walk_leg.push_back(turn_s);
         for (size_t i = out.size() - 1; i-- > 0;) {
-          walk.push_back({out[i].x, out[i].y, out[i].yaw + M_PI});
+          walk.push_back(turnedAround(out[i]));
           walk_leg.push_back(out_leg[i]);
         }
-        Pose2 home = walk.back();
-        home.yaw += M_PI;
-        walk.push_back(home);
+        walk.push_back(turnedAround(walk.back()));
         walk_leg.push_back(turn_s);
       }
       double used_s = 0.0;
@@ -88,43 +95,80 @@ std::vector<Keyframe> walkKeyframes(const std::vector<Waypoint>& waypoints, cons
       leg = walk_leg;
     }
   }
-
-  // Coarse linear path, then dense samples with bobbing and sway while moving.
-  std::vector<Keyframe> coarse;
+  PlannedWalk plan;
   double t = config.rest_start_s;
   for (size_t i = 0; i < poses.size(); ++i) {
     if (i > 0) t += leg[i - 1];
     Keyframe k;
     k.t_s = t;
-    k.p_world = Eigen::Vector3d(poses[i].x, poses[i].y, config.height_m);
-    k.yaw_rad = poses[i].yaw;
-    coarse.push_back(k);
+    k.p_world = Eigen::Vector3d(poses[i][0], poses[i][1], poses[i][2] + config.height_m);
+    k.yaw_rad = poses[i][3];
+    k.pitch_rad = poses[i][4];
+    k.roll_rad = poses[i][5];
+    plan.coarse.push_back(k);
   }
-  const double move_start_s = config.rest_start_s, move_end_s = t;
-  std::vector<Keyframe> keys;
-  Keyframe first = coarse.front();
+  plan.move_start_s = config.rest_start_s;
+  plan.move_end_s = t;
+  plan.end_s = t + rest_end_s;
+  return plan;
+}
+
+// The gait on top of the path at time s: bobbing, nod, sway, wobble, faded in and out over a second
+// at the walk's start and end.
+Vec6 withGait(Vec6 v, double s, const PlannedWalk& plan, const WalkConfig& c) {
+  const double envelope = std::clamp(std::min(s - plan.move_start_s, plan.move_end_s - s) / 1.0, 0.0, 1.0);
+  const double phase = 2 * M_PI * (s - plan.move_start_s) / c.bob_period_s;
+  v[2] += envelope * c.bob_amplitude_m * std::sin(phase);
+  v[3] += envelope * c.yaw_wobble_rad * std::sin(0.5 * phase + 1.3);
+  v[4] += envelope * c.nod_rad * std::sin(phase + 0.7);
+  v[5] += envelope * c.sway_rad * std::sin(0.5 * phase);
+  return v;
+}
+
+Keyframe keyframeOf(double t_s, const Vec6& v) {
+  Keyframe k;
+  k.t_s = t_s;
+  k.p_world = v.head<3>();
+  k.yaw_rad = v[3];
+  k.pitch_rad = v[4];
+  k.roll_rad = v[5];
+  return k;
+}
+
+std::vector<Keyframe> restingEnds(std::vector<Keyframe> keys, const PlannedWalk& plan) {
+  Keyframe first = plan.coarse.front();
   first.t_s = 0.0;
-  keys.push_back(first);
-  const double step_s = 0.25;
-  for (double s = move_start_s; s < move_end_s; s += step_s) {
-    const Vec6 v = lerpKeyframes(coarse, s);
-    const double envelope = std::clamp(std::min(s - move_start_s, move_end_s - s) / 1.0, 0.0, 1.0);
-    const double phase = 2 * M_PI * (s - move_start_s) / config.bob_period_s;
-    Keyframe k;
-    k.t_s = s;
-    k.p_world = v.head<3>();
-    k.p_world.z() += envelope * config.bob_amplitude_m * std::sin(phase);
-    k.yaw_rad = v[3];
-    k.pitch_rad = envelope * config.sway_rad * std::sin(phase + 0.7);
-    k.roll_rad = envelope * config.sway_rad * std::sin(0.5 * phase);
-    keys.push_back(k);
-  }
-  Keyframe last = coarse.back();
-  last.t_s = move_end_s;
+  keys.insert(keys.begin(), first);
+  Keyframe last = plan.coarse.back();
+  last.t_s = plan.move_end_s;
   keys.push_back(last);
-  last.t_s = move_end_s + rest_end_s;
+  last.t_s = plan.end_s;
   keys.push_back(last);
   return keys;
+}
+
+}  // namespace
+
+std::vector<Keyframe> walkKeyframes(const std::vector<Waypoint>& waypoints, const WalkConfig& config,
+                                    double total_duration_s) {
+  const PlannedWalk plan = planWalk(waypoints, config, total_duration_s);
+  std::vector<Keyframe> keys;
+  const double step_s = 0.25;
+  for (double s = plan.move_start_s; s < plan.move_end_s; s += step_s)
+    keys.push_back(keyframeOf(s, withGait(lerpKeyframes(plan.coarse, s), s, plan, config)));
+  return restingEnds(std::move(keys), plan);
+}
+
+SplineMotion walkMotion(const std::vector<Waypoint>& waypoints, const WalkConfig& config, double total_duration_s) {
+  const double path_knot_s = 0.25;
+  if (config.knot_interval_s >= path_knot_s) return SplineMotion(walkKeyframes(waypoints, config, total_duration_s));
+  const PlannedWalk plan = planWalk(waypoints, config, total_duration_s);
+  const SplineMotion path(restingEnds(plan.coarse, plan), path_knot_s);
+  std::vector<Keyframe> keys;
+  const double h = config.knot_interval_s;
+  for (int j = 0; j * h <= plan.end_s + 1e-9; ++j)
+    keys.push_back(keyframeOf(j * h, withGait(path.coordinates(j * h), j * h, plan, config)));
+  return SplineMotion(keys, h);
 }
 
 Eigen::Vector3d MotionState::specificForce() const {
@@ -145,6 +189,18 @@ SplineMotion::SplineMotion(const std::vector<Keyframe>& keyframes, double knot_i
   const int segments = static_cast<int>(std::ceil(duration_s_ / h_)) + 1;
   control_.resize(segments + 3);
   for (int j = 0; j < segments + 3; ++j) control_[j] = lerpKeyframes(keyframes, (j - 1) * h_);
+}
+
+Vec6 SplineMotion::coordinates(double t_s) const {
+  if (control_.empty()) return Vec6::Zero();
+  const double t = std::clamp(t_s, 0.0, duration_s_);
+  const int i = std::min(static_cast<int>(std::floor(t / h_)), static_cast<int>(control_.size()) - 4);
+  const double s = t / h_ - i;
+  const double s2 = s * s, s3 = s2 * s, r = 1 - s;
+  const double b[4] = {r * r * r / 6, (3 * s3 - 6 * s2 + 4) / 6, (-3 * s3 + 3 * s2 + 3 * s + 1) / 6, s3 / 6};
+  Vec6 x = Vec6::Zero();
+  for (int k = 0; k < 4; ++k) x += b[k] * control_[i + k];
+  return x;
 }
 
 MotionState SplineMotion::at(double t_s) const {
@@ -169,7 +225,8 @@ MotionState SplineMotion::at(double t_s) const {
   m.v_world = dx.head<3>();
   m.a_world = ddx.head<3>();
   const double yaw = x[3], pitch = x[4], roll = x[5];
-  m.q_world_body = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+  m.q_world_body = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+                   Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
                    Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX());
   const double dyaw = dx[3], dpitch = dx[4], droll = dx[5];
   const double sp = std::sin(pitch), cp = std::cos(pitch), sr = std::sin(roll), cr = std::cos(roll);

@@ -22,8 +22,9 @@ double deg(double d) { return d * M_PI / 180.0; }
 Simulator::Simulator(SimOptions options) : options_(std::move(options)) {
   if (options_.duration_s < 0) throw Error("simulation duration must be >= 0 s (0 = the scenario's default)");
   scenario_ = makeScenario(options_.scenario);
+  if (options_.handheld) scenario_ = carriedByHand(scenario_);
   scene_ = Scene(scenario_.boxes);
-  motion_ = SplineMotion(walkKeyframes(scenario_.waypoints, scenario_.walk, options_.duration_s));
+  motion_ = walkMotion(scenario_.waypoints, scenario_.walk, options_.duration_s);
   livox_.pattern = options_.livox_pattern;
   velodyne_beams_ = velodyneBeams(velodyne_);
   drawMount();

@@ -43,9 +43,97 @@ TEST(Motion, OfficeUTurnsPeakNear90DegPerSecondAndWalkNear08MetresPerSecond) {
   EXPECT_NEAR(max_speed, 0.8, 0.2);
 }
 
-TEST(Simulator, UnknownScenarioThrowsNamingTheValidOnes) {
-  EXPECT_THROW(Simulator(opts("garage", 5)), Error);
+// Midpoint integration of the ideal IMU of `m` from its true state at t0 over span_s.
+NavState integrateImu(const SplineMotion& m, double t0, double span_s) {
+  const double step_s = 5e-4;
+  const MotionState m0 = m.at(t0);
+  NavState s;
+  s.p_world = m0.p_world;
+  s.v_world = m0.v_world;
+  s.q_world_body = m0.q_world_body;
+  const Eigen::Vector3d g(0, 0, -kGravityM_s2);
+  for (int i = 0; i < static_cast<int>(span_s / step_s); ++i) {
+    const double t = t0 + i * step_s;
+    const MotionState a = m.at(t), mid = m.at(t + step_s / 2), b = m.at(t + step_s);
+    const Eigen::Quaterniond q_mid = s.q_world_body * so3::exp(0.5 * step_s * mid.omega_body);
+    const Eigen::Quaterniond q_end = s.q_world_body * so3::exp(step_s * mid.omega_body);
+    const Eigen::Vector3d acc_a = s.q_world_body * a.specificForce() + g, acc_m = q_mid * mid.specificForce() + g,
+                          acc_b = q_end * b.specificForce() + g;
+    s.p_world += s.v_world * step_s + step_s * step_s * (acc_a + 2 * acc_m) / 6.0;
+    s.v_world += step_s * (acc_a + 4 * acc_m + acc_b) / 6.0;
+    s.q_world_body = q_end.normalized();
+  }
+  return s;
 }
+
+TEST(Motion, ImuIntegratedBackAtLargePitchAndRollReproducesTheHandheldWalk) {
+  // Climbing 2 m while pitched up to 60 deg and rolled up to 50 deg, with the hand-held gait.
+  const std::vector<Waypoint> route = {{0, 0, 0},
+                                       {3, 0, 0.5, 0.6, 1.05, 0.0},
+                                       {5, 2, 1.5, 1.5, -0.8, 0.87},
+                                       {4, 5, 2.5, 2.0, 0.3, -0.6},
+                                       {1, -1, 3.0, 0.4}};
+  const SplineMotion m = walkMotion(route, handheldWalk());
+  double max_pitch = 0, max_roll = 0;
+  for (double t = 0; t < m.durationS(); t += 0.01) {
+    const Eigen::Matrix<double, 6, 1> c = m.coordinates(t);
+    max_pitch = std::max(max_pitch, std::abs(c[4]));
+    max_roll = std::max(max_roll, std::abs(c[5]));
+  }
+  EXPECT_GT(max_pitch, 55 * M_PI / 180);
+  EXPECT_GT(max_roll, 45 * M_PI / 180);
+  const double t0 = 2.0, span_s = m.durationS() - 4.0;
+  const NavState s = integrateImu(m, t0, span_s);
+  const MotionState truth = m.at(t0 + span_s);
+  EXPECT_LT((s.p_world - truth.p_world).norm(), 0.003);
+  EXPECT_LT((s.v_world - truth.v_world).norm(), 0.001);
+  EXPECT_LT(so3::log(s.q_world_body.conjugate() * truth.q_world_body).norm(), 1e-4);
+  EXPECT_GT((truth.p_world - m.at(t0).p_world).norm(), 1.0);  // it did move
+}
+
+TEST(Motion, HandheldGaitBouncesAtTheStepRateOnTopOfTheSameRoute) {
+  const Scenario office = makeScenario("office"), carried = carriedByHand(office);
+  const SplineMotion robot(walkKeyframes(office.waypoints, office.walk)),
+      hand = walkMotion(carried.waypoints, carried.walk);
+  // Mid-leg, the height's oscillation: 3 cm at 1.9 Hz by hand, 1.5 cm at 0.9 Hz on the robot walk
+  // (carried by 0.25 s knots, which smooth it to ~1.1 cm).
+  const auto bounce = [](const SplineMotion& m, double t0) {
+    double lo = 1e9, hi = -1e9;
+    for (double t = t0; t < t0 + 1.1; t += 0.005) {
+      lo = std::min(lo, m.at(t).p_world.z());
+      hi = std::max(hi, m.at(t).p_world.z());
+    }
+    return 0.5 * (hi - lo);
+  };
+  EXPECT_NEAR(bounce(hand, 5.0), 0.03, 0.006);
+  EXPECT_NEAR(bounce(robot, 5.0), 0.011, 0.003);
+  double max_rate = 0;
+  for (double t = 0; t < hand.durationS(); t += 0.01) max_rate = std::max(max_rate, hand.at(t).omega_body.norm());
+  EXPECT_GT(max_rate * 180 / M_PI, 140.0);
+  EXPECT_LT(max_rate * 180 / M_PI, 200.0);
+  EXPECT_LT(hand.durationS(), robot.durationS());  // faster turns, the same legs
+}
+
+TEST(Simulator, StairsClimbOneStoreyOnTheStepsAndComeBack) {
+  const Simulator sim(opts("stairs", 0));
+  double lo = 1e9, hi = -1e9;
+  for (const auto& p : sim.groundTruth()) {
+    lo = std::min(lo, p.T_world_body.translation().z());
+    hi = std::max(hi, p.T_world_body.translation().z());
+  }
+  EXPECT_NEAR(hi - lo, 3.0, 0.1);
+  EXPECT_NEAR(sim.durationS(), 110.0, 15.0);
+  // Every body position is clear of the steps, the slabs and the walls: at least 0.9 m above
+  // whatever lies beneath it, and not inside anything.
+  for (std::size_t i = 0; i < sim.groundTruth().size(); i += 50) {
+    const Eigen::Vector3d p = sim.groundTruth()[i].T_world_body.translation();
+    EXPECT_GT(sim.scene().distanceToSurface(p), 0.3) << sim.groundTruth()[i].stamp_ns;
+    const RayHit down = sim.scene().cast(p, Eigen::Vector3d(0, 0, -1), 10.0);
+    EXPECT_NEAR(down.range_m, 1.2, 0.25) << "t " << toSec(sim.groundTruth()[i].stamp_ns - sim.startNs());
+  }
+}
+
+TEST(Simulator, UnknownScenarioThrowsNamingTheValidOnes) { EXPECT_THROW(Simulator(opts("garage", 5)), Error); }
 
 TEST(Simulator, StartsAtRestAndEndsAtRestAtTheStartPose) {
   for (const std::string name : {"office", "corridor", "corridor_blind", "hall"}) {
@@ -98,7 +186,8 @@ TEST(Simulator, IntegratingTheNoiselessImuFromTheTrueInitialStateReproducesTheGr
   for (int i = 0; i < static_cast<int>(span_s / step_s); ++i) {
     const Stamp t = t0 + fromSec(i * step_s);
     // Midpoint rule: rotation by the mid-step rate, velocity by the mid-step acceleration.
-    const ImuSample a = sim.idealImu(t), m = sim.idealImu(t + fromSec(step_s / 2)), b = sim.idealImu(t + fromSec(step_s));
+    const ImuSample a = sim.idealImu(t), m = sim.idealImu(t + fromSec(step_s / 2)),
+                    b = sim.idealImu(t + fromSec(step_s));
     const Eigen::Quaterniond q_mid = s.q_world_body * so3::exp(0.5 * step_s * m.gyro_rad_s);
     const Eigen::Quaterniond q_end = s.q_world_body * so3::exp(step_s * m.gyro_rad_s);
     // Simpson on the world acceleration for velocity, trapezoid-corrected for position.
@@ -149,7 +238,8 @@ TEST(Simulator, PointsOfSweepsProjectedWithGroundTruthLieOnSceneSurfaces) {
 
 TEST(Simulator, ExtrinsicsAreTheDocumentedOnes) {
   const Simulator sim(opts("office", 5, 1, 0.02));
-  EXPECT_LT((sim.livoxExtrinsic().T_imu_sensor.translation() - Eigen::Vector3d(0.05512, 0.02226, -0.0297)).norm(), 1e-12);
+  EXPECT_LT((sim.livoxExtrinsic().T_imu_sensor.translation() - Eigen::Vector3d(0.05512, 0.02226, -0.0297)).norm(),
+            1e-12);
   EXPECT_TRUE(sim.livoxExtrinsic().T_imu_sensor.linear().isIdentity(1e-12));
   const LidarExtrinsic v = sim.velodyneExtrinsic();
   EXPECT_NEAR(Eigen::AngleAxisd(v.T_imu_sensor.linear()).angle() * 180 / M_PI, 3.9, 0.3);

@@ -19,9 +19,12 @@ struct Keyframe {
   double yaw_rad = 0.0, pitch_rad = 0.0, roll_rad = 0.0;
 };
 
-/// A waypoint of a walk: the body passes (x, y) with heading yaw (unwrapped, rad).
+/// A waypoint of a walk: the body passes (x, y) with heading yaw (unwrapped, rad), `height_m`
+/// (WalkConfig) above a floor at z_m, pitched and rolled by pitch_rad and roll_rad (a look down is
+/// a positive pitch, a robot on a ramp pitches with it).
 struct Waypoint {
   double x_m = 0.0, y_m = 0.0, yaw_rad = 0.0;
+  double z_m = 0.0, pitch_rad = 0.0, roll_rad = 0.0;
 };
 
 /// How a walk through waypoints is timed.
@@ -31,9 +34,17 @@ struct WalkConfig {
   double height_m = 1.2;           // body height above the floor
   double bob_amplitude_m = 0.015;  // vertical bobbing while walking
   double bob_period_s = 1.1;
-  double sway_rad = 0.012;         // small roll/pitch while walking
-  double rest_start_s = 2.5;       // at rest before moving
-  double rest_end_s = 2.5;         // at rest after returning
+  double sway_rad = 0.012;       // roll at half the bobbing rate (the weight going from foot to foot)
+  double nod_rad = 0.012;        // pitch at the bobbing rate
+  double yaw_wobble_rad = 0.0;   // yaw at half the bobbing rate (a hand-held rig swinging)
+  double climb_rate_m_s = 0.35;  // vertical speed on stairs and ramps (legs are slower there)
+  double look_rate_rad_s = 1.0;  // pitch / roll speed of deliberate looks up, down or sideways
+  // Knot spacing of the motion spline. 0.25 s carries a robot's slow bobbing; a walking gait
+  // (steps at ~2 Hz) needs finer knots, which then carry the gait on top of a path that is still
+  // smoothed at 0.25 s (finer knots on the path itself would turn its corners into jerks).
+  double knot_interval_s = 0.25;
+  double rest_start_s = 2.5;  // at rest before moving
+  double rest_end_s = 2.5;    // at rest after returning
 };
 
 /// Keyframes of a walk: rest, waypoints at the configured speeds, rest. When `motion_budget_s`
@@ -64,10 +75,16 @@ class SplineMotion {
   double durationS() const { return duration_s_; }
   /// Clamped to [0, duration]. Before the first and after the last keyframe the body rests.
   MotionState at(double t_s) const;
+  /// The spline's coordinates at t: x y z (m), yaw pitch roll (rad).
+  Eigen::Matrix<double, 6, 1> coordinates(double t_s) const;
 
  private:
   double h_ = 0.25, duration_s_ = 0.0;
   std::vector<Eigen::Matrix<double, 6, 1>> control_;  // x y z yaw pitch roll
 };
+
+/// The motion of a walk (walkKeyframes), on knots of config.knot_interval_s.
+SplineMotion walkMotion(const std::vector<Waypoint>& waypoints, const WalkConfig& config,
+                        double total_duration_s = 0.0);
 
 }  // namespace mmlio::sim

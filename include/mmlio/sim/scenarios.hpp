@@ -8,6 +8,9 @@
 //   hall     127 x 35 x 8 m with 4 rows of pillars, entered through a 3 m wide, 12 m long passage;
 //            the walk starts and ends 1.5 m in front of the passage's end wall (the solid-state
 //            LiDAR sees only that wall there).
+//   stairs   two storeys 3 m apart (20 x 6.4 m each, a corridor and a room off it, the same plan,
+//            different furniture), a switch-back staircase (0.167 m risers, 0.28 m treads, a
+//            landing); carried by hand up, through the upper floor, down and back.
 
 #include <string>
 #include <vector>
@@ -24,9 +27,16 @@ struct Scenario {
   WalkConfig walk;
 };
 
-/// "office", "corridor", "corridor_blind", "hall".
+/// "office", "corridor", "corridor_blind", "hall", "stairs".
 std::vector<std::string> scenarioNames();
 /// Throws mmlio::Error naming the valid scenarios for an unknown name.
 Scenario makeScenario(const std::string& name);
+
+/// A walker's hand-held gait: ~3 cm bounce at 1.9 steps/s, 3 deg sway and nod, 2 deg yaw wobble,
+/// turns up to 150 deg/s.
+WalkConfig handheldWalk();
+/// The scenario's route carried by hand: the hand-held gait at the route's speed, and deliberate
+/// looks 25 deg down and 20 deg up between waypoints.
+Scenario carriedByHand(Scenario s);
 
 }  // namespace mmlio::sim

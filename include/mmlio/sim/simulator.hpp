@@ -44,7 +44,7 @@ struct ImuNoiseConfig {
 };
 
 struct SimOptions {
-  std::string scenario;                 // "office", "corridor", "corridor_blind", "hall"
+  std::string scenario;                 // "office", "corridor", "corridor_blind", "hall", "stairs"
   double duration_s = 0;                // 0: the scenario's full walk (office ~40 s, corridor ~110 s, hall ~150 s)
   std::uint64_t seed = 1;               // noise seed (the scene and the walk do not depend on it)
   double velodyne_time_offset_s = 0;    // Velodyne stamps are written as t_true - offset
@@ -55,6 +55,7 @@ struct SimOptions {
   bool random_mount = false;            // both extrinsics and the Velodyne sweep phase drawn from the seed
   bool livox_no_returns_as_zero = false;  // beams without a return become (0,0,0) points, as the Livox driver does
   int people = 0;                       // people walking through the scene (see people.hpp), paths from the seed
+  bool handheld = false;                // the route carried by hand (carriedByHand in scenarios.hpp)
 };
 
 /// A scenario's full walk with every other option at its default.
