@@ -12,6 +12,12 @@
 #include "mmlio/map/geometry_fit.hpp"
 
 namespace mmlio::estimator {
+namespace {
+
+// Every map neighbour of a plane or line fit lies within this of the fitted plane or line.
+constexpr double kFitToleranceM = 0.1;
+
+}  // namespace
 
 std::vector<MapMatch> findMapMatches(const Features& f, const Eigen::Isometry3d& T_world_body,
                                      const map::VoxelHashMap& edge_map, const map::VoxelHashMap& plane_map,
@@ -37,18 +43,18 @@ std::vector<MapMatch> findMapMatches(const Features& f, const Eigen::Isometry3d&
           continue;
         }
         if (plane_map.knn(q, cfg.neighbours, cfg.max_distance_m, &nn) < cfg.neighbours) continue;
-        const map::PlaneFit fit = map::fitPlane(nn, 0.1);
+        const map::PlaneFit fit = map::fitPlane(nn, kFitToleranceM);
         if (!fit.ok) continue;
         m = {MapMatch::Kind::kPlane, f.plane_source.empty() ? std::uint8_t{0} : f.plane_source[i], p, fit.normal,
              Eigen::Vector3d(fit.d, 0, 0)};
       } else {
         if (edge_map.knn(q, cfg.neighbours, cfg.max_distance_m, &nn) < cfg.neighbours) continue;
-        const map::LineFit fit = map::fitLine(nn, 3.0);
+        const map::LineFit fit = map::fitLine(nn, 3.0, kFitToleranceM);
         if (!fit.ok) continue;
-        m = {MapMatch::Kind::kEdge, f.edge_source.empty() ? std::uint8_t{0} : f.edge_source[i - n_planes], p,
-             fit.point, fit.direction};
+        m = {MapMatch::Kind::kEdge, f.edge_source.empty() ? std::uint8_t{0} : f.edge_source[i - n_planes], p, fit.point,
+             fit.direction};
       }
-      found[i] = 1;
+      found[i] = matchDistance(m, T_world_body) <= cfg.max_residual_m ? 1 : 0;
     }
   });
   std::vector<MapMatch> out;
@@ -76,8 +82,7 @@ ceres::CostFunction* mapMatchCost(const MapMatch& m, double weight) {
   return new PointToEdgeFactor(m.p_body, m.a, m.b, weight);
 }
 
-MapMatchesFactor::MapMatchesFactor(const std::vector<MapMatch>& matches, double weight, double huber)
-    : huber_(huber) {
+MapMatchesFactor::MapMatchesFactor(const std::vector<MapMatch>& matches, double weight, double huber) : huber_(huber) {
   for (const MapMatch& m : matches) {
     if (m.kind == MapMatch::Kind::kPlane) {
       planes_.push_back({m.p_body, weight * m.a, weight * m.b.x()});

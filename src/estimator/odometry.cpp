@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <limits>
 #include <unordered_map>
 
 #include "mmlio/core/flat_key_index.hpp"
@@ -34,10 +35,12 @@ constexpr std::size_t kMinCorrespondences = 30;
 /// max(from, sweep start) to the sweep end, as poses relative to the end pose; the end state into
 /// *end if given.
 lidar::SweepMotion imuMotion(const NavState& start, const std::vector<ImuSample>& samples, Stamp from,
-                             const lidar::AlignedSweep& sweep, const Eigen::Vector3d& g_world, NavState* end = nullptr) {
+                             const lidar::AlignedSweep& sweep, const Eigen::Vector3d& g_world,
+                             NavState* end = nullptr) {
   std::vector<Stamp> query;
   const int n = 10;
-  for (int k = 0; k <= n; ++k) query.push_back(std::max(from, sweep.start_ns + (sweep.end_ns - sweep.start_ns) * k / n));
+  for (int k = 0; k <= n; ++k)
+    query.push_back(std::max(from, sweep.start_ns + (sweep.end_ns - sweep.start_ns) * k / n));
   const std::vector<NavState> states = imu::propagate(start, samples, query, g_world);
   const Eigen::Isometry3d T_end_inv = states.back().pose().inverse();
   std::vector<double> times;
@@ -49,7 +52,7 @@ lidar::SweepMotion imuMotion(const NavState& start, const std::vector<ImuSample>
   if (end) *end = states.back();
   return lidar::SweepMotion(times, poses);
 }
-constexpr Stamp kMaxImuGapNs = 50000000;  // 50 ms: ten samples of a 200 Hz IMU
+constexpr Stamp kMaxImuGapNs = 50000000;       // 50 ms: ten samples of a 200 Hz IMU
 constexpr double kGuessedVelocitySigma = 1.0;  // m/s: a velocity guessed across a gap (walking, driving slowly)
 // Registration rounds and the window find matches again once a pose moved a tenth of the plane
 // voxel or a tenth of a degree from where they were found.
@@ -64,6 +67,11 @@ constexpr double kGapMotionScales[] = {1.0, 0.5, 0.0};
 constexpr double kGapYawStepRad = 10.0 * M_PI / 180.0;  // registration converges from about twice this
 constexpr double kMaxTurnRate = 90.0 * M_PI / 180.0;    // rad/s: a walker, a robot turning on the spot
 constexpr double kFitInlierM = 0.1;  // fit score: matches closer than this count, the closer the more
+// Matched at a pose the IMU predicted from a tracked state (centimetres off), a point farther than this from its map
+// plane or line is not on it: a neighbour of another surface (the next stair nosing, the far side
+// of a slab edge). Huber's loss would still give each such match a constant pull, and where the
+// LiDARs constrain a direction weakly (height on a staircase) a few of them drag the pose.
+constexpr double kMaxMatchResidualM = 0.1;
 
 void integrateSamples(imu::Preintegration& pre, const std::vector<ImuSample>& samples) { pre.integrate(samples); }
 
@@ -87,10 +95,10 @@ struct Odometry::Impl {
   std::vector<char> rejected_sources;  // of the last registration, by LiDAR index
   std::vector<char> edge_poor;         // this sweep's solid-state frames the edge count marks bad
   FreeSpaceMemory free_space;
-  std::shared_ptr<SweepView> view;     // this sweep's, while it is processed
-  bool in_imu_gap = false;             // the last sweep had no usable IMU
+  std::shared_ptr<SweepView> view;                       // this sweep's, while it is processed
+  bool in_imu_gap = false;                               // the last sweep had no usable IMU
   Eigen::Vector3d omega_body = Eigen::Vector3d::Zero();  // last sweep's turn rate, rad/s
-  ceres::Manifold* pose_manifold = nullptr;  // owned by the problems (kept alive separately)
+  ceres::Manifold* pose_manifold = nullptr;              // owned by the problems (kept alive separately)
 
   Impl(OdometryConfig c, std::vector<LidarSetup> l)
       : cfg(std::move(c)),
@@ -117,6 +125,11 @@ struct Odometry::Impl {
 
   std::vector<ImuSample> imuBuffer() const { return {imu.begin(), imu.end()}; }
 
+  /// The residual gate of a pose predicted by the IMU from a tracked state; none otherwise.
+  static double matchGate(bool imu_predicted, bool prev_velocity_guessed) {
+    return imu_predicted && !prev_velocity_guessed ? kMaxMatchResidualM : std::numeric_limits<double>::infinity();
+  }
+
   std::size_t indexOf(const std::string& name) const {
     for (std::size_t i = 0; i < lidars.size(); ++i)
       if (lidars[i].extrinsic.name == name) return i;
@@ -131,7 +144,8 @@ struct Odometry::Impl {
 
   bool usesSurfacePoints(const std::string& sensor) const {
     if (cfg.surface_points == SurfacePoints::kAll) return true;
-    return cfg.surface_points == SurfacePoints::kSolidState && setupOf(sensor)->extrinsic.kind == LidarKind::kSolidState;
+    return cfg.surface_points == SurfacePoints::kSolidState &&
+           setupOf(sensor)->extrinsic.kind == LidarKind::kSolidState;
   }
 
   // ---- stage: de-skew, features, bad frame, merge ----
@@ -152,6 +166,7 @@ struct Odometry::Impl {
       deskewed[i] = std::move(*scans[i]);
       lidar::deskewToEnd(deskewed[i], setup.extrinsic.T_imu_sensor, motion, end_s);
       if (!views.empty()) {
+        views[i].source = static_cast<std::uint8_t>(indexOf(setup.extrinsic.name));
         views[i].T_body_sensor = setup.extrinsic.T_imu_sensor;
         views[i].image = map::RangeImage(deskewed[i].points, cfg.dynamic.image);
       }
@@ -171,7 +186,11 @@ struct Odometry::Impl {
       }
     });
 
+    // A frame kept for judgement is thinned on its own: should registration reject it, the other
+    // LiDARs' features are then exactly those they have without it (a shared voxel would otherwise
+    // carry its centroid, or go with it).
     std::vector<Point> edges, planes;
+    std::vector<std::vector<Point>> judged_edges(lidars.size()), judged_planes(lidars.size());
     std::size_t n_edges = 0, n_planes = 0, n_points = 0;
     for (const LidarFrameStats& s : stats) {
       n_edges += s.edges;
@@ -181,6 +200,7 @@ struct Odometry::Impl {
     edges.reserve(n_edges);
     planes.reserve(n_planes);
     if (cfg.keep_points) out->points_body.reserve(n_points);
+    std::vector<char> dropped(scans.size(), 0);  // bad frames that leave the sweep before registration
     for (std::size_t i = 0; i < scans.size(); ++i) {
       const Eigen::Isometry3f T = setupOf(deskewed[i].sensor)->extrinsic.T_imu_sensor.cast<float>();
       const auto source = static_cast<std::uint8_t>(indexOf(deskewed[i].sensor));
@@ -194,9 +214,11 @@ struct Odometry::Impl {
       // Judged by information, an edge-poor frame stays in until registration has seen what it constrains.
       const bool keep_for_judgement = stats[i].bad_frame && cfg.bad_frame.by_information;
       if (keep_for_judgement) edge_poor[source] = 1;
-      if (!stats[i].bad_frame || keep_for_judgement) {
-        toBody(clouds[i].edges, &edges);
-        toBody(surface_points[i] ? deskewed[i].points : clouds[i].planes, &planes);
+      dropped[i] = stats[i].bad_frame && !keep_for_judgement;
+      if (!dropped[i]) {
+        toBody(clouds[i].edges, keep_for_judgement ? &judged_edges[source] : &edges);
+        toBody(surface_points[i] ? deskewed[i].points : clouds[i].planes,
+               keep_for_judgement ? &judged_planes[source] : &planes);
       }
       if (cfg.keep_points) toBody(deskewed[i].points, &out->points_body);
     }
@@ -205,14 +227,15 @@ struct Odometry::Impl {
     if (!views.empty()) {
       view = std::make_shared<SweepView>();
       view->stamp_ns = sweep.end_ns;
-      view->sensors = std::move(views);
+      for (std::size_t i = 0; i < views.size(); ++i)
+        if (!dropped[i]) view->sensors.push_back(std::move(views[i]));
     }
 
     Features f;
     // A voxel shared by two LiDARs keeps its first point's source.
     auto toVec = [](const std::vector<Point>& pts, std::vector<Eigen::Vector3d>* dst, std::vector<std::uint8_t>* src) {
-      dst->reserve(pts.size());
-      src->reserve(pts.size());
+      dst->reserve(dst->size() + pts.size());
+      src->reserve(src->size() + pts.size());
       for (const Point& p : pts) {
         dst->push_back(p.xyz.cast<double>());
         src->push_back(p.source);
@@ -220,6 +243,10 @@ struct Odometry::Impl {
     };
     toVec(lidar::voxelDownsample(edges, cfg.edge_voxel_m), &f.edges, &f.edge_source);
     toVec(lidar::voxelDownsample(planes, cfg.plane_voxel_m), &f.planes, &f.plane_source);
+    for (std::size_t s = 0; s < lidars.size(); ++s) {
+      toVec(lidar::voxelDownsample(judged_edges[s], cfg.edge_voxel_m), &f.edges, &f.edge_source);
+      toVec(lidar::voxelDownsample(judged_planes[s], cfg.plane_voxel_m), &f.planes, &f.plane_source);
+    }
     return f;
   }
 
@@ -233,15 +260,7 @@ struct Odometry::Impl {
     double prev_sb[9];
     std::copy(xi.speed_bias, xi.speed_bias + 9, prev_sb);
     std::size_t used = 0;
-    const int rounds = std::max(1, cfg.match_rounds);
-    for (int round = 0; round < rounds; ++round) {
-      const Eigen::Isometry3d T_before = poseOf(xj.pose);
-      matches = findMapMatches(f, T_before, edge_map, plane_map);
-      if (round == 0) judgeLidars(matches, T_before, &rejected, out);
-      matches.erase(std::remove_if(matches.begin(), matches.end(), [&](const MapMatch& m) { return rejected[m.source]; }),
-                    matches.end());
-      used = matches.size();
-      if (used < kMinCorrespondences) return used;
+    const auto solve = [&](const std::vector<MapMatch>& with, int iterations) {
       ceres::Problem::Options po;
       po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
       ceres::Problem problem(po);
@@ -256,15 +275,47 @@ struct Odometry::Impl {
         // sweeps without IMU it was only guessed (LiDAR displacement across the gap): held to it, the
         // stiff IMU factor would carry its error on, the LiDARs correcting only the slack.
         const double sigma_v = prev_velocity_guessed ? kGuessedVelocitySigma : cfg.prior_sigma_v_m_s;
-        problem.AddResidualBlock(new SpeedBiasPrior(prev_sb, sigma_v, cfg.prior_sigma_ba, cfg.prior_sigma_bg),
-                                 nullptr, xi.speed_bias);
+        problem.AddResidualBlock(new SpeedBiasPrior(prev_sb, sigma_v, cfg.prior_sigma_ba, cfg.prior_sigma_bg), nullptr,
+                                 xi.speed_bias);
         problem.AddResidualBlock(new ImuFactor(pre, g_world), nullptr, xi.pose, xi.speed_bias, xj.pose, xj.speed_bias);
       }
-      addMapResiduals(problem, xj.pose, matches, cfg.lidar_sigma_m, cfg.huber_loss_m);
+      addMapResiduals(problem, xj.pose, with, cfg.lidar_sigma_m, cfg.huber_loss_m);
       ceres::Solver::Summary summary;
-      ceres::Solve(odometrySolverOptions(std::max(2, cfg.max_iterations / rounds)), &problem, &summary);
+      ceres::Solve(odometrySolverOptions(iterations), &problem, &summary);
+    };
+    // The first round starts from the prediction and takes every match: the prediction may be off
+    // by more than the gate (a velocity carried over a gap). What the last round solves with lies
+    // within the gate of the pose the rounds before it found.
+    const double gate = matchGate(pre != nullptr, prev_velocity_guessed);
+    const int rounds = std::max(1, cfg.match_rounds);
+    const int iterations = std::max(2, cfg.max_iterations / rounds);
+    bool gate_applied = !std::isfinite(gate);
+    for (int round = 0; round < rounds; ++round) {
+      const Eigen::Isometry3d T_before = poseOf(xj.pose);
+      MapMatchConfig matching;
+      if (round > 0) matching.max_residual_m = gate;
+      gate_applied = gate_applied || round > 0;
+      matches = findMapMatches(f, T_before, edge_map, plane_map, matching);
+      if (round == 0) judgeLidars(matches, T_before, &rejected, out);
+      matches.erase(
+          std::remove_if(matches.begin(), matches.end(), [&](const MapMatch& m) { return rejected[m.source]; }),
+          matches.end());
+      used = matches.size();
+      if (used < kMinCorrespondences) return used;
+      solve(matches, iterations);
       // Associations are redone to follow the pose; a pose that barely moved would find the same ones.
       if (!reassociationFor(cfg).needed(T_before, poseOf(xj.pose))) break;
+    }
+    if (!gate_applied) {
+      // The same associations, less those beyond the gate at the pose found.
+      const Eigen::Isometry3d T = poseOf(xj.pose);
+      const std::size_t found = matches.size();
+      matches.erase(
+          std::remove_if(matches.begin(), matches.end(), [&](const MapMatch& m) { return matchDistance(m, T) > gate; }),
+          matches.end());
+      used = matches.size();
+      if (used < kMinCorrespondences) return used;
+      if (used < found) solve(matches, iterations);
     }
     *state = fromBlocks(xj, state->stamp_ns);
     // What did the LiDARs constrain? Along what they could not, nearest-neighbour associations only
@@ -346,7 +397,7 @@ struct Odometry::Impl {
           analyseDegeneracy(matchInformation(matches, T, cfg.huber_loss_m, static_cast<int>(s)), cfg.degeneracy);
       st.translation_points = d.translation_points;
       (*rejected)[s] = edge_poor[s] && d.translation_degenerate;
-      st.bad_frame = (*rejected)[s] != 0;
+      if (edge_poor[s]) st.bad_frame = (*rejected)[s] != 0;  // the others' verdicts were final
     }
   }
 
@@ -365,15 +416,19 @@ struct Odometry::Impl {
 
   FeatureBudget registrationBudget() const {
     const auto count = [](int n) { return static_cast<std::size_t>(std::max(0, n)); };
-    return {count(cfg.registration_max_edges), count(cfg.registration_max_planes), cfg.edge_voxel_m,
-            cfg.plane_voxel_m};
+    return {count(cfg.registration_max_edges), count(cfg.registration_max_planes), cfg.edge_voxel_m, cfg.plane_voxel_m};
   }
 
-  /// Bad frames found during registration leave the sweep's features (window and map).
+  /// Bad frames found during registration leave the sweep's features (window and map) and its
+  /// view of free space: the estimate goes on as without that LiDAR.
   void dropRejected(Features* f) const {
     if (std::none_of(rejected_sources.begin(), rejected_sources.end(), [](char c) { return c != 0; })) return;
     dropSources(rejected_sources, &f->edges, &f->edge_source);
     dropSources(rejected_sources, &f->planes, &f->plane_source);
+    if (view)
+      view->sensors.erase(std::remove_if(view->sensors.begin(), view->sensors.end(),
+                                         [&](const SensorView& s) { return rejected_sources[s.source] != 0; }),
+                          view->sensors.end());
   }
 
   // ---- stage: returns on things that moved in (space an earlier sweep saw through) ----
@@ -392,9 +447,17 @@ struct Odometry::Impl {
     // lie next to those: every feature in a voxel touching a flagged one goes with them.
     // The flagged voxels are few: their neighbourhoods go in one set, looked up once per feature.
     FlatKeySet near_flagged;
-    const auto bodyPoint = [&](std::size_t i) { return i < f->edges.size() ? f->edges[i] : f->planes[i - f->edges.size()]; };
+    const auto bodyPoint = [&](std::size_t i) {
+      return i < f->edges.size() ? f->edges[i] : f->planes[i - f->edges.size()];
+    };
+    // Not from a frame still under judgement: rejected, it must leave the other LiDARs' features as they were.
+    const auto judged = [&](std::size_t i) {
+      const std::vector<std::uint8_t>& src = i < f->edges.size() ? f->edge_source : f->plane_source;
+      const std::size_t k = i < f->edges.size() ? i : i - f->edges.size();
+      return k < src.size() && edge_poor[src[k]] != 0;
+    };
     for (std::size_t i = 0; i < moved.size(); ++i)
-      if (moved[i])
+      if (moved[i] && !judged(i))
         for (int n = 0; n < 27; ++n) near_flagged.insert(key(bodyPoint(i), n % 3 - 1, (n / 3) % 3 - 1, n / 9 - 1));
     if (!near_flagged.empty())
       for (std::size_t i = 0; i < moved.size(); ++i)
@@ -423,8 +486,10 @@ struct Odometry::Impl {
     if (moved_voxels.empty() || out->points_body.empty()) return;
     std::size_t k = 0;
     for (const Point& p : out->points_body) {
-      if (moved_voxels.contains(key(p.xyz.cast<double>()))) out->points_dynamic_body.push_back(p);
-      else out->points_body[k++] = p;
+      if (moved_voxels.contains(key(p.xyz.cast<double>())))
+        out->points_dynamic_body.push_back(p);
+      else
+        out->points_body[k++] = p;
     }
     out->points_body.resize(k);
   }
@@ -504,8 +569,9 @@ SweepResult Odometry::process(lidar::AlignedSweep sweep) {
     d.last.stamp_ns = sweep.start_ns;
     d.last.q_world_body = d.init_result.q_world_imu;
     d.last.bias.gyro_rad_s = d.init_result.gyro_bias;
-    log::emit(d.init_result.forced ? log::Level::kWarn : log::Level::kInfo, "IMU initialised: ", d.init_result.message,
-              d.init_result.forced ? " (no standstill: gyro bias starts at 0, roll/pitch from the mean acceleration)" : "");
+    log::emit(
+        d.init_result.forced ? log::Level::kWarn : log::Level::kInfo, "IMU initialised: ", d.init_result.message,
+        d.init_result.forced ? " (no standstill: gyro bias starts at 0, roll/pitch from the mean acceleration)" : "");
   }
 
   // ---- IMU prediction over the sweep, motion for de-skew ----
@@ -553,7 +619,8 @@ SweepResult Odometry::process(lidar::AlignedSweep sweep) {
       NavState start = prev;
       start.stamp_ns = sweep.start_ns;
       start.p_world = prev.p_world + prev.v_world * toSec(sweep.start_ns - prev.stamp_ns);
-      start.q_world_body = (prev.q_world_body * so3::exp(d.omega_body * toSec(sweep.start_ns - prev.stamp_ns))).normalized();
+      start.q_world_body =
+          (prev.q_world_body * so3::exp(d.omega_body * toSec(sweep.start_ns - prev.stamp_ns))).normalized();
       NavState end;
       motion = imuMotion(start, within, sweep.start_ns, sweep, d.g_world, &end);
       unobserved_s = toSec(sweep.start_ns - prev.stamp_ns);
@@ -569,8 +636,9 @@ SweepResult Odometry::process(lidar::AlignedSweep sweep) {
     // movers (measured: 40 % of the features), so the LiDARs cannot pull the pose back. The views
     // restart with the data.
     d.free_space.clear();
-    if (!d.in_imu_gap) log::emit(log::Level::kWarn, "no IMU data over the sweep ending at ", toSec(sweep.end_ns),
-                                 " s: LiDAR-only registration until it returns (the report counts degraded sweeps)");
+    if (!d.in_imu_gap)
+      log::emit(log::Level::kWarn, "no IMU data over the sweep ending at ", toSec(sweep.end_ns),
+                " s: LiDAR-only registration until it returns (the report counts degraded sweeps)");
   }
   const bool prev_velocity_guessed = d.in_imu_gap;  // the previous sweep had no IMU
   d.in_imu_gap = !imu_ok;
@@ -590,9 +658,9 @@ SweepResult Odometry::process(lidar::AlignedSweep sweep) {
   bool tracked = true;
   d.rejected_sources = d.edge_poor;  // unless registration judges them by their information
   if (!d.plane_map.empty()) {
-    out.correspondences =
-        imu_ok ? d.registerSweep(matched, pre, prev, prev_velocity_guessed, &state, &out)
-               : d.registerAcrossGap(matched, prev, prev_velocity_guessed, unobserved_s, &state, &out);
+    out.correspondences = imu_ok
+                              ? d.registerSweep(matched, pre, prev, prev_velocity_guessed, &state, &out)
+                              : d.registerAcrossGap(matched, prev, prev_velocity_guessed, unobserved_s, &state, &out);
     if (out.correspondences < kMinCorrespondences) {
       tracked = false;
       state = predicted;
@@ -613,6 +681,7 @@ SweepResult Odometry::process(lidar::AlignedSweep sweep) {
     kf.features = std::move(features);
     kf.pre = d.pre_since_keyframe;
     if (!d.window.empty() && !kf.pre) kf.pre = pre;
+    kf.max_match_residual_m = Impl::matchGate(imu_ok, prev_velocity_guessed);
     d.window.push(std::move(kf));
     d.window.optimize(d.edge_map, d.plane_map);
     out.times_ms.emplace_back("window", watch.lapMs());

@@ -75,7 +75,9 @@ const std::vector<MapMatch>& SlidingWindow::matchesOf(WindowKeyframe& kf, const 
                                                       const map::VoxelHashMap& plane_map) const {
   const Eigen::Isometry3d T = poseOf(kf.x.pose);
   if (!kf.matched || cfg_.reassociation.needed(kf.matched_at, T)) {
-    kf.matches = findMapMatches(kf.features, T, edge_map, plane_map, cfg_.matching);
+    MapMatchConfig matching = cfg_.matching;
+    matching.max_residual_m = std::min(matching.max_residual_m, kf.max_match_residual_m);
+    kf.matches = findMapMatches(kf.features, T, edge_map, plane_map, matching);
     kf.matched_at = T;
     kf.matched = true;
   }
@@ -123,8 +125,10 @@ void SlidingWindow::marginalizeOldest(const map::VoxelHashMap& edge_map, const m
     info->addResidualBlock({new MarginalizationFactor(prior_), nullptr, prior_blocks_, drop});
   }
   // NOLINTNEXTLINE(clang-analyzer-cplusplus.NewDeleteLeaks): owned by info
-  info->addResidualBlock({new ImuFactor(next.pre, g_world_), nullptr,
-                          {old.x.pose, old.x.speed_bias, next.x.pose, next.x.speed_bias}, {0, 1}});
+  info->addResidualBlock({new ImuFactor(next.pre, g_world_),
+                          nullptr,
+                          {old.x.pose, old.x.speed_bias, next.x.pose, next.x.speed_bias},
+                          {0, 1}});
   const double w = 1.0 / cfg_.lidar_sigma_m;
   ceres::LossFunction* loss = new ceres::HuberLoss(cfg_.huber_loss_m * w);  // shared, deleted once
   bool loss_used = false;

@@ -47,13 +47,18 @@ PlaneFit fitPlane(const std::vector<Eigen::Vector3d>& pts, double max_residual_m
   return fit;
 }
 
-LineFit fitLine(const std::vector<Eigen::Vector3d>& pts, double min_eigen_ratio) {
+LineFit fitLine(const std::vector<Eigen::Vector3d>& pts, double min_eigen_ratio, double max_residual_m) {
   LineFit fit;
   if (pts.size() < 2) return fit;
   const Scatter s = scatterOf(pts);
   fit.point = s.mean;
   fit.direction = s.eigenvectors.col(2).normalized();
-  fit.ok = s.eigenvalues(2) > 0 && s.eigenvalues(2) > min_eigen_ratio * s.eigenvalues(1);
+  for (const auto& p : pts) {
+    const Eigen::Vector3d d = p - fit.point;
+    fit.max_residual_m = std::max(fit.max_residual_m, (d - fit.direction * fit.direction.dot(d)).norm());
+  }
+  fit.ok = s.eigenvalues(2) > 0 && s.eigenvalues(2) > min_eigen_ratio * s.eigenvalues(1) &&
+           fit.max_residual_m <= max_residual_m;
   return fit;
 }
 

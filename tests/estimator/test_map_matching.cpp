@@ -53,5 +53,25 @@ TEST(MapMatching, APointFarFromItsVoxelsPlaneTakesItsNeighboursPlane) {
   EXPECT_NEAR(matchDistance(m, Eigen::Isometry3d::Identity()), 0.07, 1e-6);
 }
 
+TEST(MapMatching, APointOnTheFarSideOfASlabMatchesNothingWithAResidualGate) {
+  // The map holds a 0.25 m slab's underside (seen from the storey below); a point on its top face
+  // finds those neighbours and their plane 0.25 m away: with a gate it is left unmatched.
+  map::VoxelHashMap planes(0.5, 60, false);
+  const map::VoxelHashMap edges(0.5, 60);
+  std::vector<Eigen::Vector3d> underside;
+  for (int i = 0; i < 20; ++i)
+    for (int j = 0; j < 20; ++j) underside.emplace_back(0.05 * i, 0.05 * j, 2.75);
+  planes.add(underside);
+  Features f;
+  f.planes = {Eigen::Vector3d(0.52, 0.48, 3.0)};
+  const Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  EXPECT_NEAR(matchDistance(only(findMapMatches(f, T, edges, planes)), T), 0.25, 1e-9);
+  MapMatchConfig gated;
+  gated.max_residual_m = 0.1;
+  EXPECT_TRUE(findMapMatches(f, T, edges, planes, gated).empty());
+  f.planes = {Eigen::Vector3d(0.52, 0.48, 2.8)};  // 5 cm below the underside: matched
+  EXPECT_NEAR(matchDistance(only(findMapMatches(f, T, edges, planes, gated)), T), 0.05, 1e-9);
+}
+
 }  // namespace
 }  // namespace mmlio::estimator

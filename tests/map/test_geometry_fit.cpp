@@ -51,6 +51,19 @@ TEST(GeometryFit, LineIsRejectedForARoundBlob) {
   EXPECT_FALSE(fitLine(pts).ok);
 }
 
+TEST(GeometryFit, LineIsRejectedForNeighboursOnTwoParallelStairNosings) {
+  // Five nearest edge points on two nosings of a staircase (0.28 m treads, 0.167 m risers): the
+  // cloud is elongated along the nosings, but its axis runs between them, on neither.
+  const std::vector<Eigen::Vector3d> pts{{0, 0, 0}, {0, 0.5, 0}, {0, 1.0, 0}, {0.28, 0.25, 0.167}, {0.28, 0.75, 0.167}};
+  const LineFit loose = fitLine(pts);
+  EXPECT_TRUE(loose.ok);
+  EXPECT_NEAR(loose.max_residual_m, 0.6 * std::hypot(0.28, 0.167), 0.02);  // the axis splits them 3:2
+  EXPECT_FALSE(fitLine(pts, 3.0, 0.1).ok);
+  // One nosing alone, with 1 cm noise, passes the same tolerance.
+  const std::vector<Eigen::Vector3d> one{{0, 0, 0.01}, {0, 0.3, -0.01}, {0.01, 0.6, 0}, {0, 0.9, 0.005}, {0, 1.2, 0}};
+  EXPECT_TRUE(fitLine(one, 3.0, 0.1).ok);
+}
+
 TEST(GeometryFit, PlaneIsRejectedForOneNoisyRingLine) {
   // Five neighbours from one LiDAR ring on a floor: a 1 m line with 1.5 cm range noise. Any plane
   // containing the line fits them, so the fitted normal says nothing about tilt.

@@ -14,7 +14,8 @@ struct CorridorRun {
   std::size_t degenerate = 0, registered = 0;
 };
 
-CorridorRun runCorridor(const std::string& mode, estimator::SurfacePoints surface_points, sim::SolidStatePattern pattern) {
+CorridorRun runCorridor(const std::string& mode, estimator::SurfacePoints surface_points,
+                        sim::SolidStatePattern pattern) {
   sim::SimOptions so;
   so.scenario = "corridor";
   so.duration_s = 20.0;
@@ -37,11 +38,15 @@ CorridorRun runCorridor(const std::string& mode, estimator::SurfacePoints surfac
 
 TEST(FusionOnSimulation, EverySolidStateReturnReachesTheEstimatorAndHoldsTheCorridorAxis) {
   const CorridorRun lines = runCorridor("hi", estimator::SurfacePoints::kNone, sim::SolidStatePattern::kLissajous);
-  const CorridorRun surface = runCorridor("hi", estimator::SurfacePoints::kSolidState, sim::SolidStatePattern::kLissajous);
+  const CorridorRun surface =
+      runCorridor("hi", estimator::SurfacePoints::kSolidState, sim::SolidStatePattern::kLissajous);
   std::printf("HI corridor 20 s: scan-line planes ATE %.3f m; every return ATE %.3f m, %zu/%zu sweeps degenerate\n",
               lines.eval.ate_rmse_m, surface.eval.ate_rmse_m, surface.degenerate, surface.registered);
   EXPECT_LT(surface.eval.ate_rmse_m, 0.10);
-  EXPECT_GT(lines.eval.ate_rmse_m, 5 * surface.eval.ate_rmse_m);  // why surface_points defaults to solid_state
+  // Why surface_points defaults to solid_state. Scan-line planes alone once lost the axis (1.7 m);
+  // since matches are gated and line fits checked, they hold it, less well.
+  EXPECT_GT(lines.eval.ate_rmse_m, 1.2 * surface.eval.ate_rmse_m);
+  EXPECT_LT(lines.eval.ate_rmse_m, 0.3);
 }
 
 TEST(FusionOnSimulation, HviBeatsVelodyneAloneWithEitherSolidStatePattern) {
@@ -53,6 +58,63 @@ TEST(FusionOnSimulation, HviBeatsVelodyneAloneWithEitherSolidStatePattern) {
     EXPECT_LT(hvi.eval.ate_rmse_m, 0.025);
     EXPECT_LE(hvi.eval.ate_rmse_m, vi.eval.ate_rmse_m);
   }
+}
+
+struct BadFrameRun {
+  Trajectory trajectory;
+  std::size_t solid_state_frames = 0, bad_frames = 0;
+};
+
+BadFrameRun runWithBadFrames(const sim::Simulator& sim, const std::string& mode, const lidar::BadFrameConfig& rule) {
+  io::RigConfig cfg = testing::simRigConfig(sim);
+  cfg.estimator.bad_frame = rule;
+  BadFrameRun run;
+  pipeline::OnlinePipeline online(cfg, mode, [&](const estimator::SweepResult& r) {
+    if (r.status == estimator::SweepResult::Status::kInitializing) return;
+    run.trajectory.push_back({r.state.stamp_ns, r.state.pose()});
+    for (const auto& l : r.lidars)
+      if (l.sensor == "livox") {
+        ++run.solid_state_frames;
+        run.bad_frames += l.bad_frame ? 1 : 0;
+      }
+  });
+  testing::replay(sim, online);
+  return run;
+}
+
+void expectSameTrajectory(const Trajectory& a, const Trajectory& b) {
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GT(a.size(), 30u);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].stamp_ns, b[i].stamp_ns);
+    EXPECT_EQ((a[i].T_world_body.matrix() - b[i].T_world_body.matrix()).cwiseAbs().maxCoeff(), 0.0) << i;
+  }
+}
+
+// A rejected solid-state frame takes nothing of the spinning LiDAR with it: with every frame
+// rejected, HVI is VI, pose for pose. Judged by information, the blind start (the Livox 0.6 m
+// from a wall, which is all it sees) rejects every frame during registration; by the edge count
+// alone, an office with every frame declared bad drops them before registration.
+TEST(FusionOnSimulation, WithEverySolidStateFrameRejectedHviGivesViTrajectory) {
+  sim::SimOptions blind;
+  blind.scenario = "corridor_blind";
+  blind.duration_s = 6.0;
+  const sim::Simulator blind_sim(blind);
+  const BadFrameRun judged = runWithBadFrames(blind_sim, "hvi", lidar::BadFrameConfig());
+  EXPECT_EQ(judged.bad_frames, judged.solid_state_frames);
+  expectSameTrajectory(judged.trajectory, runWithBadFrames(blind_sim, "vi", lidar::BadFrameConfig()).trajectory);
+
+  sim::SimOptions office;
+  office.scenario = "office";
+  office.duration_s = 8.0;
+  const sim::Simulator office_sim(office);
+  lidar::BadFrameConfig every_frame_bad;
+  every_frame_bad.by_information = false;
+  every_frame_bad.min_edge_points = 1000000;
+  const BadFrameRun counted = runWithBadFrames(office_sim, "hvi", every_frame_bad);
+  EXPECT_EQ(counted.bad_frames, counted.solid_state_frames);
+  EXPECT_GT(counted.bad_frames, 30u);
+  expectSameTrajectory(counted.trajectory, runWithBadFrames(office_sim, "vi", every_frame_bad).trajectory);
 }
 
 }  // namespace

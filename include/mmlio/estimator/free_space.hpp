@@ -21,15 +21,16 @@
 namespace mmlio::estimator {
 
 struct DynamicConfig {
-  bool enabled = true;          // reject returns on moving objects, carve the local map
-  map::RangeImageConfig image;  // visibility test (margins, window)
-  double look_back_min_s = 0.4; // earlier sweeps tested: old enough for a walker to have moved
-  double look_back_max_s = 1.2; // ... a body length, young enough to overlap the current view
-  double carve_radius_m = 20.0; // local map points farther than this are not tested (image.max_range_m)
+  bool enabled = true;           // reject returns on moving objects, carve the local map
+  map::RangeImageConfig image;   // visibility test (margins, window)
+  double look_back_min_s = 0.4;  // earlier sweeps tested: old enough for a walker to have moved
+  double look_back_max_s = 1.2;  // ... a body length, young enough to overlap the current view
+  double carve_radius_m = 20.0;  // local map points farther than this are not tested (image.max_range_m)
 };
 
 /// One LiDAR's view at the end of a sweep.
 struct SensorView {
+  std::uint8_t source = 0;  // the LiDAR, by index
   Eigen::Isometry3d T_body_sensor = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d T_sensor_world = Eigen::Isometry3d::Identity();  // at the odometry estimate
   map::RangeImage image;

@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "mmlio/map/voxel_hash_map.hpp"
@@ -17,7 +18,7 @@ namespace mmlio::estimator {
 
 /// Body-frame features of one sweep.
 struct Features {
-  std::vector<Eigen::Vector3d> edges, planes;          // matched against the map (and added to it)
+  std::vector<Eigen::Vector3d> edges, planes;           // matched against the map (and added to it)
   std::vector<std::uint8_t> edge_source, plane_source;  // the LiDAR of each (empty: all from LiDAR 0)
 };
 
@@ -31,9 +32,12 @@ struct MapMatch {
 };
 
 struct MapMatchConfig {
-  double max_distance_m = 1.0;  // farther map neighbours make no correspondence
-  int neighbours = 5;           // map points per line / plane fit
+  double max_distance_m = 1.0;      // farther map neighbours make no correspondence
+  int neighbours = 5;               // map points per line / plane fit
   double voxel_plane_gate_m = 0.1;  // a point takes its map voxel's plane only if this near it
+  // A point farther than this from its fitted plane or line (at the pose it is matched at) is left
+  // unmatched: infinity for a pose that may be far off (after a gap in the data).
+  double max_residual_m = std::numeric_limits<double>::infinity();
 };
 
 /// Matches found at one pose hold at another until the pose has moved this far from where they

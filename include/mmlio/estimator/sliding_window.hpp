@@ -8,6 +8,7 @@
 #include <ceres/solver.h>
 
 #include <deque>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -38,13 +39,16 @@ struct WindowKeyframe {
   std::vector<MapMatch> matches;
   Eigen::Isometry3d matched_at = Eigen::Isometry3d::Identity();
   bool matched = false;
+  // Farthest a point may lie from its map plane or line to be matched (MapMatchConfig): infinity
+  // for a keyframe whose pose was only registered by the LiDARs (across a gap in the data).
+  double max_match_residual_m = std::numeric_limits<double>::infinity();
 };
 
 struct SlidingWindowConfig {
-  int size = 4;                   // keyframes kept; the oldest beyond is marginalised
-  int max_iterations = 10;        // solver iterations per optimisation
-  double lidar_sigma_m = 0.05;    // point-to-map residual standard deviation
-  double huber_loss_m = 0.05;     // robust loss scale of the point-to-map residuals
+  int size = 4;                 // keyframes kept; the oldest beyond is marginalised
+  int max_iterations = 10;      // solver iterations per optimisation
+  double lidar_sigma_m = 0.05;  // point-to-map residual standard deviation
+  double huber_loss_m = 0.05;   // robust loss scale of the point-to-map residuals
   MapMatchConfig matching;
   Reassociation reassociation;  // when a keyframe's kept matches are found again
 };
