@@ -4,14 +4,15 @@
 # worst ATE, end-to-end error (% of path) and map sharpness per scene and mode, and keeps every
 # run's JSON line in OUT/results.jsonl.
 # Usage: scripts/accuracy.sh [OUT]   (default accuracy_out)
-#   SCENES="office corridor corridor_blind hall" SEEDS="1 2 3" NOISE="1 3 5" MODES="hvi vi hi" PEOPLE="0"
+#   SCENES="office corridor corridor_blind hall stairs office+handheld corridor+handheld" SEEDS="1 2 3"
+#   NOISE="1 3 5" MODES="hvi vi hi" PEOPLE="0"   (SCENE+handheld: the scene's route carried by hand)
 #   (PEOPLE="0 4": every cell also with 4 people walking; the table then has a row per people count)
 #   JOBS=2 (parallel cells; each run also uses TBB threads)
 #   scripts/accuracy.sh --list prints the job commands instead (one per line, for a cluster scheduler),
 #   scripts/accuracy.sh --summarise OUT prints the table of an existing results.jsonl.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-SCENES="${SCENES:-office corridor corridor_blind hall}"
+SCENES="${SCENES:-office corridor corridor_blind hall stairs office+handheld corridor+handheld}"
 SEEDS="${SEEDS:-1 2 3}"
 NOISE="${NOISE:-1 3 5}"
 MODES="${MODES:-hvi vi hi}"
