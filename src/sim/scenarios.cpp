@@ -351,9 +351,54 @@ Scenario stairs() {
   return s;
 }
 
+// A hall with a ramp (1:12, 4.8 deg) up to a platform 1 m high, driven like a robot: up the
+// ramp, round on the platform, down and home. The rig pitches with the slope. The ramp is built
+// of 2 cm steps (boxes are axis-aligned), below the LiDARs' range noise.
+Scenario ramp() {
+  Scenario s;
+  s.name = "ramp";
+  const double L = 30.0, W = 8.0, H = 4.5, rise = 1.0, x0 = 8.0, run = 12.0, y0 = 1.8, y1 = 4.2;
+  Builder b;
+  b.add(-0.3, -0.3, -0.2, L + 0.3, W + 0.3, 0, 60);
+  b.add(-0.3, -0.3, H, L + 0.3, W + 0.3, H + 0.2, 200);
+  b.add(-0.3, -0.3, 0, 0, W + 0.3, H, 150);
+  b.add(L, -0.3, 0, L + 0.3, W + 0.3, H, 150);
+  b.add(0, -0.3, 0, L, 0, H, 140);
+  b.add(0, W, 0, L, W + 0.3, H, 140);
+  const int steps = 50;
+  for (int k = 0; k < steps; ++k)
+    b.add(x0 + run * k / steps, y0, 0, x0 + run * (k + 1) / steps, y1, rise * (k + 1) / steps, 100);
+  b.add(x0 + run, 0.8, 0, 28.5, 6.0, rise, 110);                                      // the platform
+  b.add(x0 + run, 5.9, rise, 28.5, 6.0, rise + 1.0, 220);                             // its railing (a plate)
+  for (double x : {4.0, 14.0, 24.0}) b.add(x - 0.25, 6.8, 0, x + 0.25, 7.3, H, 170);  // pillars
+  b.add(2.0, 6.5, 0, 5.0, 7.6, 1.8, 120);                                             // shelves
+  b.add(10.0, 0.2, 0, 13.0, 0.8, 1.2, 130);
+  b.add(22.0, 1.0, rise, 23.2, 1.8, rise + 0.9, 90);  // crates on the platform
+  b.add(26.0, 4.4, rise, 27.0, 5.4, rise + 1.5, 160);
+  for (double x : {3.0, 9.0, 15.0, 21.0, 27.0}) b.add(x, 3.8, H - 0.05, x + 1.2, 4.2, H, 250);  // lamps
+  s.boxes = b.boxes;
+  const double slope = std::atan2(rise, run), yc = 0.5 * (y0 + y1);
+  s.waypoints = {{3.0, yc, 0},
+                 {x0 - 0.6, yc, 0},
+                 {x0 + 0.4, yc, 0, rise * 0.4 / run, -slope},
+                 {x0 + run - 0.4, yc, 0, rise * (run - 0.4) / run, -slope},
+                 {x0 + run + 0.6, yc, 0, rise},
+                 {26.0, yc - 0.3, 0, rise},
+                 {26.5, yc + 0.4, M_PI, rise},
+                 {x0 + run + 0.6, yc, M_PI, rise},
+                 {x0 + run - 0.4, yc, M_PI, rise * (run - 0.4) / run, slope},
+                 {x0 + 0.4, yc, M_PI, rise * 0.4 / run, slope},
+                 {x0 - 0.6, yc, M_PI},
+                 {3.0, yc, M_PI},
+                 {3.0, yc, 2 * M_PI}};
+  s.walk.speed_m_s = 1.0;
+  s.walk.yaw_rate_rad_s = 1.0;
+  return s;
+}
+
 }  // namespace
 
-std::vector<std::string> scenarioNames() { return {"office", "corridor", "corridor_blind", "hall", "stairs"}; }
+std::vector<std::string> scenarioNames() { return {"office", "corridor", "corridor_blind", "hall", "stairs", "ramp"}; }
 
 Scenario carriedByHand(Scenario s) {
   const double speed_m_s = s.walk.speed_m_s;
@@ -372,7 +417,8 @@ Scenario makeScenario(const std::string& name) {
   if (name == "corridor_blind") return corridorBlind();
   if (name == "hall") return hall();
   if (name == "stairs") return stairs();
-  throw Error("unknown scenario '" + name + "'; valid scenarios: office, corridor, corridor_blind, hall, stairs");
+  if (name == "ramp") return ramp();
+  throw Error("unknown scenario '" + name + "'; valid scenarios: office, corridor, corridor_blind, hall, stairs, ramp");
 }
 
 }  // namespace mmlio::sim

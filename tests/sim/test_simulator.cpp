@@ -133,6 +133,23 @@ TEST(Simulator, StairsClimbOneStoreyOnTheStepsAndComeBack) {
   }
 }
 
+TEST(Simulator, RampRobotPitchesWithTheSlopeAndClimbsOneMetre) {
+  const Simulator sim(opts("ramp", 0));
+  double lo = 1e9, hi = -1e9, max_pitch = 0;
+  for (const auto& p : sim.groundTruth()) {
+    lo = std::min(lo, p.T_world_body.translation().z());
+    hi = std::max(hi, p.T_world_body.translation().z());
+    const Eigen::Vector3d forward = p.T_world_body.linear().col(0);
+    max_pitch = std::max(max_pitch, std::asin(std::abs(forward.z())));
+  }
+  EXPECT_NEAR(hi - lo, 1.0, 0.05);
+  EXPECT_NEAR(max_pitch * 180 / M_PI, std::atan2(1.0, 12.0) * 180 / M_PI, 1.0);  // 4.8 deg, and the bobbing
+  for (std::size_t i = 0; i < sim.groundTruth().size(); i += 50) {
+    const Eigen::Vector3d p = sim.groundTruth()[i].T_world_body.translation();
+    EXPECT_NEAR(sim.scene().cast(p, Eigen::Vector3d(0, 0, -1), 10.0).range_m, 1.2, 0.1);
+  }
+}
+
 TEST(Simulator, UnknownScenarioThrowsNamingTheValidOnes) { EXPECT_THROW(Simulator(opts("garage", 5)), Error); }
 
 TEST(Simulator, StartsAtRestAndEndsAtRestAtTheStartPose) {

@@ -11,6 +11,8 @@
 //   stairs   two storeys 3 m apart (20 x 6.4 m each, a corridor and a room off it, the same plan,
 //            different furniture), a switch-back staircase (0.167 m risers, 0.28 m treads, a
 //            landing); carried by hand up, through the upper floor, down and back.
+//   ramp     30 x 8 x 4.5 m with a 12 m ramp (1:12) up to a 1 m platform, driven like a robot that
+//            pitches with the slope: up, round on the platform, down and home.
 
 #include <string>
 #include <vector>
@@ -27,7 +29,7 @@ struct Scenario {
   WalkConfig walk;
 };
 
-/// "office", "corridor", "corridor_blind", "hall", "stairs".
+/// "office", "corridor", "corridor_blind", "hall", "stairs", "ramp".
 std::vector<std::string> scenarioNames();
 /// Throws mmlio::Error naming the valid scenarios for an unknown name.
 Scenario makeScenario(const std::string& name);
