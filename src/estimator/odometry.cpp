@@ -67,10 +67,11 @@ constexpr double kGapMotionScales[] = {1.0, 0.5, 0.0};
 constexpr double kGapYawStepRad = 10.0 * M_PI / 180.0;  // registration converges from about twice this
 constexpr double kMaxTurnRate = 90.0 * M_PI / 180.0;    // rad/s: a walker, a robot turning on the spot
 constexpr double kFitInlierM = 0.1;  // fit score: matches closer than this count, the closer the more
-// Matched at a pose the IMU predicted from a tracked state (centimetres off), a point farther than this from its map
-// plane or line is not on it: a neighbour of another surface (the next stair nosing, the far side
-// of a slab edge). Huber's loss would still give each such match a constant pull, and where the
-// LiDARs constrain a direction weakly (height on a staircase) a few of them drag the pose.
+// Matched at a pose the IMU predicted from a tracked state (centimetres off), a point farther than
+// this from its map plane or line is not on it: a neighbour of another surface (the next stair
+// nosing, the far side of a slab). Huber's loss would still give each such match a constant pull,
+// and where the LiDARs constrain a direction weakly (height on a staircase) a few of them drag the
+// pose.
 constexpr double kMaxMatchResidualM = 0.1;
 
 void integrateSamples(imu::Preintegration& pre, const std::vector<ImuSample>& samples) { pre.integrate(samples); }

@@ -191,21 +191,8 @@ SplineMotion::SplineMotion(const std::vector<Keyframe>& keyframes, double knot_i
   for (int j = 0; j < segments + 3; ++j) control_[j] = lerpKeyframes(keyframes, (j - 1) * h_);
 }
 
-Vec6 SplineMotion::coordinates(double t_s) const {
-  if (control_.empty()) return Vec6::Zero();
-  const double t = std::clamp(t_s, 0.0, duration_s_);
-  const int i = std::min(static_cast<int>(std::floor(t / h_)), static_cast<int>(control_.size()) - 4);
-  const double s = t / h_ - i;
-  const double s2 = s * s, s3 = s2 * s, r = 1 - s;
-  const double b[4] = {r * r * r / 6, (3 * s3 - 6 * s2 + 4) / 6, (-3 * s3 + 3 * s2 + 3 * s + 1) / 6, s3 / 6};
-  Vec6 x = Vec6::Zero();
-  for (int k = 0; k < 4; ++k) x += b[k] * control_[i + k];
-  return x;
-}
-
-MotionState SplineMotion::at(double t_s) const {
-  MotionState m;
-  if (control_.empty()) return m;
+SplineMotion::Jet SplineMotion::evaluate(double t_s) const {
+  Jet j{Vec6::Zero(), Vec6::Zero(), Vec6::Zero()};
   const double t = std::clamp(t_s, 0.0, duration_s_);
   const int i = std::min(static_cast<int>(std::floor(t / h_)), static_cast<int>(control_.size()) - 4);
   const double s = t / h_ - i;
@@ -213,14 +200,23 @@ MotionState SplineMotion::at(double t_s) const {
   const double b[4] = {r * r * r / 6, (3 * s3 - 6 * s2 + 4) / 6, (-3 * s3 + 3 * s2 + 3 * s + 1) / 6, s3 / 6};
   const double db[4] = {-0.5 * r * r, 1.5 * s2 - 2 * s, -1.5 * s2 + s + 0.5, 0.5 * s2};
   const double ddb[4] = {r, 3 * s - 2, -3 * s + 1, s};
-  Vec6 x = Vec6::Zero(), dx = Vec6::Zero(), ddx = Vec6::Zero();
   for (int k = 0; k < 4; ++k) {
-    x += b[k] * control_[i + k];
-    dx += db[k] * control_[i + k];
-    ddx += ddb[k] * control_[i + k];
+    j.x += b[k] * control_[i + k];
+    j.dx += db[k] * control_[i + k];
+    j.ddx += ddb[k] * control_[i + k];
   }
-  dx /= h_;
-  ddx /= h_ * h_;
+  j.dx /= h_;
+  j.ddx /= h_ * h_;
+  return j;
+}
+
+Vec6 SplineMotion::coordinates(double t_s) const { return control_.empty() ? Vec6::Zero() : evaluate(t_s).x; }
+
+MotionState SplineMotion::at(double t_s) const {
+  MotionState m;
+  if (control_.empty()) return m;
+  const Jet j = evaluate(t_s);
+  const Vec6 &x = j.x, &dx = j.dx, &ddx = j.ddx;
   m.p_world = x.head<3>();
   m.v_world = dx.head<3>();
   m.a_world = ddx.head<3>();

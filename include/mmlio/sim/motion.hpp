@@ -79,6 +79,11 @@ class SplineMotion {
   Eigen::Matrix<double, 6, 1> coordinates(double t_s) const;
 
  private:
+  struct Jet {
+    Eigen::Matrix<double, 6, 1> x, dx, ddx;  // coordinates and their first and second time derivatives
+  };
+  Jet evaluate(double t_s) const;
+
   double h_ = 0.25, duration_s_ = 0.0;
   std::vector<Eigen::Matrix<double, 6, 1>> control_;  // x y z yaw pitch roll
 };
