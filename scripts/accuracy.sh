@@ -4,7 +4,7 @@
 # worst ATE, end-to-end error (% of path) and map sharpness per scene and mode, and keeps every
 # run's JSON line in OUT/results.jsonl.
 # Usage: scripts/accuracy.sh [OUT]   (default accuracy_out)
-#   SCENES="office corridor corridor_blind hall stairs ramp office+handheld corridor+handheld" SEEDS="1 2 3"
+#   SCENES="office corridor corridor_blind hall stairs ramp lab office+handheld corridor+handheld" SEEDS="1 2 3"
 #   NOISE="1 3 5" MODES="hvi vi hi" PEOPLE="0"   (SCENE+handheld: the scene's route carried by hand)
 #   (PEOPLE="0 4": every cell also with 4 people walking; the table then has a row per people count)
 #   JOBS=2 (parallel cells; each run also uses TBB threads)
@@ -12,7 +12,7 @@
 #   scripts/accuracy.sh --summarise OUT prints the table of an existing results.jsonl.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-SCENES="${SCENES:-office corridor corridor_blind hall stairs ramp office+handheld corridor+handheld}"
+SCENES="${SCENES:-office corridor corridor_blind hall stairs ramp lab office+handheld corridor+handheld}"
 SEEDS="${SEEDS:-1 2 3}"
 NOISE="${NOISE:-1 3 5}"
 MODES="${MODES:-hvi vi hi}"
@@ -37,7 +37,7 @@ for r in rows:
         r["scene"] = f'{r["scene"]} +{r["people"]} people'
 print("| scene | run | runs | ATE median | ATE worst | end-to-end % of path median / worst | map to surfaces median | map off surfaces median / worst | HVI <= min(VI, HI) |")
 print("|---|---|---|---|---|---|---|---|---|")
-base = ["office", "corridor", "corridor_blind", "hall", "stairs", "ramp"]
+base = ["office", "corridor", "corridor_blind", "hall", "stairs", "ramp", "lab"]
 scenes = sorted({r["scene"] for r in rows}, key=lambda s: (base.index(s.split()[0].split("+")[0]) if s.split()[0].split("+")[0] in base else 9, s))
 for sc in scenes:
     cells = {}

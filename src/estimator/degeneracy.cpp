@@ -1,6 +1,7 @@
 #include "mmlio/estimator/degeneracy.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 
 namespace mmlio::estimator {
@@ -54,7 +55,8 @@ Matrix6d matchInformation(const std::vector<MapMatch>& matches, const Eigen::Iso
   return H;
 }
 
-Degeneracy analyseDegeneracy(const Matrix6d& information, const DegeneracyConfig& cfg) {
+Degeneracy analyseDegeneracy(const Matrix6d& information, const DegeneracyConfig& cfg,
+                             const Eigen::Matrix3d* position_covariance_m2, double sigma_m) {
   Degeneracy d;
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> t(schurBlock(information, 0)), r(schurBlock(information, 3));
   d.translation_basis = t.eigenvectors();
@@ -64,9 +66,53 @@ Degeneracy analyseDegeneracy(const Matrix6d& information, const DegeneracyConfig
   d.translation_points = std::max(0.0, t.eigenvalues()(0));
   d.rotation_points = std::max(0.0, r.eigenvalues()(0));
   d.weak_translation = t.eigenvectors().col(0);
-  d.translation_degenerate = d.translation_points < cfg.min_points;
+  for (int i = 0; i < 3; ++i) {
+    d.translation_thresholds(i) = cfg.min_points;
+    if (!position_covariance_m2) continue;
+    const Eigen::Vector3d u = d.translation_basis.col(i);
+    const double variance = u.dot(*position_covariance_m2 * u);
+    if (variance > 0)
+      d.translation_thresholds(i) =
+          std::clamp(sigma_m * sigma_m / variance, std::min(cfg.min_points_drifted, cfg.min_points), cfg.min_points);
+  }
+  for (int i = 0; i < 3 && !d.translation_degenerate; ++i)
+    if (d.translation_eigenvalues(i) < d.translation_thresholds(i)) {
+      d.translation_degenerate = true;
+      d.weak_translation = d.translation_basis.col(i);
+    }
   d.rotation_degenerate = d.rotation_points < cfg.min_points;
   return d;
+}
+
+void PredictionDrift::predict(double dt_s, double drift_m_s2) {
+  if (dt_s <= 0 || drift_m_s2 <= 0) return;
+  Matrix6d F = Matrix6d::Identity();
+  F.topRightCorner<3, 3>() = dt_s * Eigen::Matrix3d::Identity();
+  const double q = drift_m_s2 * drift_m_s2;
+  Matrix6d Q = Matrix6d::Zero();  // white acceleration over dt
+  Q.topLeftCorner<3, 3>() = q * dt_s * dt_s * dt_s / 3.0 * Eigen::Matrix3d::Identity();
+  Q.topRightCorner<3, 3>() = q * dt_s * dt_s / 2.0 * Eigen::Matrix3d::Identity();
+  Q.bottomLeftCorner<3, 3>() = Q.topRightCorner<3, 3>();
+  Q.bottomRightCorner<3, 3>() = q * dt_s * Eigen::Matrix3d::Identity();
+  P_ = F * P_ * F.transpose() + Q;
+}
+
+void PredictionDrift::update(const Degeneracy& d, double sigma_m) {
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();  // of the position, 1/m^2
+  for (int i = 0; i < 3; ++i) {
+    const double points = d.translation_eigenvalues(i);
+    if (points < d.translation_thresholds(i) || points <= 0) continue;
+    const Eigen::Vector3d u = d.translation_basis.col(i);
+    information += points / (sigma_m * sigma_m) * u * u.transpose();
+  }
+  if (information.isZero()) return;
+  // P+ = P - P H^T (H P H^T + R)^-1 H P with H = [I 0] and R^-1 = information, written with
+  // information so that unobserved directions (zero information) are left as they were.
+  const Eigen::Matrix<double, 6, 3> PHt = P_.leftCols<3>();
+  const Eigen::Matrix3d S = Eigen::Matrix3d::Identity() + information * P_.topLeftCorner<3, 3>();
+  const Eigen::Matrix<double, 6, 3> K = PHt * S.inverse() * information;
+  P_ -= K * PHt.transpose();
+  P_ = 0.5 * (P_ + P_.transpose());
 }
 
 int remapDegenerateDirections(const Degeneracy& d, const DegeneracyConfig& cfg, const Eigen::Vector3d& p_predicted,
@@ -74,7 +120,7 @@ int remapDegenerateDirections(const Degeneracy& d, const DegeneracyConfig& cfg, 
                               Eigen::Vector3d* p, Eigen::Quaterniond* q, Eigen::Vector3d* v) {
   int remapped = 0;
   for (int i = 0; i < 3; ++i) {
-    if (d.translation_eigenvalues(i) >= cfg.min_points) continue;
+    if (d.translation_eigenvalues(i) >= d.translation_thresholds(i)) continue;
     const Eigen::Vector3d u = d.translation_basis.col(i);
     *p -= u * u.dot(*p - p_predicted);
     *v -= u * u.dot(*v - v_predicted);

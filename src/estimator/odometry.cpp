@@ -95,6 +95,7 @@ struct Odometry::Impl {
   std::size_t keyframes = 0;
   std::vector<char> rejected_sources;  // of the last registration, by LiDAR index
   std::vector<char> edge_poor;         // this sweep's solid-state frames the edge count marks bad
+  PredictionDrift drift;               // how far the IMU prediction may have drifted, per direction
   FreeSpaceMemory free_space;
   std::shared_ptr<SweepView> view;                       // this sweep's, while it is processed
   bool in_imu_gap = false;                               // the last sweep had no usable IMU
@@ -321,7 +322,9 @@ struct Odometry::Impl {
     *state = fromBlocks(xj, state->stamp_ns);
     // What did the LiDARs constrain? Along what they could not, nearest-neighbour associations only
     // drag the pose: keep the IMU prediction there.
-    out->degeneracy = analyseDegeneracy(matchInformation(matches, state->pose(), cfg.huber_loss_m), cfg.degeneracy);
+    const Eigen::Matrix3d prediction_covariance = drift.positionCovariance();
+    out->degeneracy = analyseDegeneracy(matchInformation(matches, state->pose(), cfg.huber_loss_m), cfg.degeneracy,
+                                        &prediction_covariance, cfg.lidar_sigma_m);
     out->registered = true;
     rejected_sources = rejected;
     if (cfg.remap_degenerate && out->degeneracy.any())
@@ -389,7 +392,9 @@ struct Odometry::Impl {
 
   // Per LiDAR: what its own matches constrain at the predicted pose. A solid-state frame the edge
   // count marks bad (edge_poor) whose matches also leave a translation direction unobserved (a
-  // wall filling its view, nothing in range) is a bad frame: its points leave the sweep.
+  // wall filling its view, nothing in range) is a bad frame: its points leave the sweep, unless
+  // no other LiDAR has matches. Then it is all the sweep has: rejected, the sweep would ride on
+  // the IMU in every direction; kept, only along what it leaves unobserved (degeneracy remapping).
   void judgeLidars(const std::vector<MapMatch>& matches, const Eigen::Isometry3d& T, std::vector<char>* rejected,
                    SweepResult* out) const {
     for (LidarFrameStats& st : out->lidars) {
@@ -398,6 +403,13 @@ struct Odometry::Impl {
           analyseDegeneracy(matchInformation(matches, T, cfg.huber_loss_m, static_cast<int>(s)), cfg.degeneracy);
       st.translation_points = d.translation_points;
       (*rejected)[s] = edge_poor[s] && d.translation_degenerate;
+    }
+    const bool others_matched = std::any_of(matches.begin(), matches.end(), [&](const MapMatch& m) {
+      return !(*rejected)[m.source];
+    });
+    if (!others_matched) std::fill(rejected->begin(), rejected->end(), 0);
+    for (LidarFrameStats& st : out->lidars) {
+      const std::size_t s = indexOf(st.sensor);
       if (edge_poor[s]) st.bad_frame = (*rejected)[s] != 0;  // the others' verdicts were final
     }
   }
@@ -658,10 +670,12 @@ SweepResult Odometry::process(lidar::AlignedSweep sweep) {
   NavState state = predicted;
   bool tracked = true;
   d.rejected_sources = d.edge_poor;  // unless registration judges them by their information
+  d.drift.predict(toSec(sweep.end_ns - prev.stamp_ns), d.cfg.degeneracy.drift_m_s2);
   if (!d.plane_map.empty()) {
     out.correspondences = imu_ok
                               ? d.registerSweep(matched, pre, prev, prev_velocity_guessed, &state, &out)
                               : d.registerAcrossGap(matched, prev, prev_velocity_guessed, unobserved_s, &state, &out);
+    if (out.registered && out.correspondences >= kMinCorrespondences) d.drift.update(out.degeneracy, d.cfg.lidar_sigma_m);
     if (out.correspondences < kMinCorrespondences) {
       tracked = false;
       state = predicted;

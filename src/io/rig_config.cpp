@@ -78,6 +78,13 @@ void bindOdometry(YamlBinder& b, estimator::OdometryConfig& c) {
   b.field("degenerate_min_points", c.degeneracy.min_points,
           "a sweep is degenerate along a direction its map matches constrain less than this many perfectly "
           "aligned plane points would (translation; rotation per metre of lever arm)");
+  b.field("degenerate_drift_m_s2", c.degeneracy.drift_m_s2,
+          "how fast the IMU prediction is taken to drift along a direction the LiDARs leave unobserved "
+          "(m/s^2/sqrt(Hz), the bias and tilt not yet pinned down); the longer it goes unobserved, the weaker "
+          "the LiDAR evidence that counts there (0: degenerate_min_points alone)");
+  b.field("degenerate_min_points_drifted", c.degeneracy.min_points_drifted,
+          "... but never fewer effective points than this: a handful of matches is as likely a wrong association "
+          "as a surface");
   b.field("remap_degenerate", c.remap_degenerate,
           "keep the IMU prediction along degenerate directions instead of the registration's solution");
   b.field("map_voxel_m", c.map_voxel_m, "local map resolution, m");
@@ -296,6 +303,8 @@ void validateRigConfig(const RigConfig& cfg) {
   check.nonNegative(e.registration_max_edges, "odometry.registration_max_edges");
   check.nonNegative(e.registration_max_planes, "odometry.registration_max_planes");
   check.nonNegative(e.degeneracy.min_points, "odometry.degenerate_min_points");
+  check.nonNegative(e.degeneracy.drift_m_s2, "odometry.degenerate_drift_m_s2");
+  check.nonNegative(e.degeneracy.min_points_drifted, "odometry.degenerate_min_points_drifted");
   check.positive(e.map_voxel_m, "odometry.map_voxel_m");
   check.positive(e.local_map_radius_m, "odometry.local_map_radius_m");
   check.positive(e.window_size, "odometry.window_size");

@@ -147,28 +147,59 @@ std::vector<Keyframe> restingEnds(std::vector<Keyframe> keys, const PlannedWalk&
   return keys;
 }
 
-}  // namespace
+constexpr double kPathKnotS = 0.25;
 
-std::vector<Keyframe> walkKeyframes(const std::vector<Waypoint>& waypoints, const WalkConfig& config,
-                                    double total_duration_s) {
-  const PlannedWalk plan = planWalk(waypoints, config, total_duration_s);
+// The plan sampled every kPathKnotS with the gait on top, resting at both ends.
+std::vector<Keyframe> gaitKeyframes(const PlannedWalk& plan, const WalkConfig& config) {
   std::vector<Keyframe> keys;
-  const double step_s = 0.25;
-  for (double s = plan.move_start_s; s < plan.move_end_s; s += step_s)
+  for (double s = plan.move_start_s; s < plan.move_end_s; s += kPathKnotS)
     keys.push_back(keyframeOf(s, withGait(lerpKeyframes(plan.coarse, s), s, plan, config)));
   return restingEnds(std::move(keys), plan);
 }
 
-SplineMotion walkMotion(const std::vector<Waypoint>& waypoints, const WalkConfig& config, double total_duration_s) {
-  const double path_knot_s = 0.25;
-  if (config.knot_interval_s >= path_knot_s) return SplineMotion(walkKeyframes(waypoints, config, total_duration_s));
-  const PlannedWalk plan = planWalk(waypoints, config, total_duration_s);
-  const SplineMotion path(restingEnds(plan.coarse, plan), path_knot_s);
+// The plan's motion: the path smoothed on 0.25 s knots, the gait on top on the config's knots.
+SplineMotion motionOf(const PlannedWalk& plan, const WalkConfig& config) {
+  if (config.knot_interval_s >= kPathKnotS) return SplineMotion(gaitKeyframes(plan, config), kPathKnotS);
+  const SplineMotion path(restingEnds(plan.coarse, plan), kPathKnotS);
   std::vector<Keyframe> keys;
   const double h = config.knot_interval_s;
   for (int j = 0; j * h <= plan.end_s + 1e-9; ++j)
     keys.push_back(keyframeOf(j * h, withGait(path.coordinates(j * h), j * h, plan, config)));
   return SplineMotion(keys, h);
+}
+
+// A recorded path timed as recorded: rest, the path (cut at the budget, if any), rest.
+PlannedWalk planRecorded(const std::vector<Keyframe>& recorded, const WalkConfig& config, double total_duration_s) {
+  PlannedWalk plan;
+  plan.move_start_s = config.rest_start_s;
+  const double t0 = recorded.front().t_s;
+  const double budget_s = total_duration_s > 0.0 ? total_duration_s - config.rest_start_s - config.rest_end_s
+                                                 : recorded.back().t_s - t0;
+  for (Keyframe k : recorded) {
+    if (!plan.coarse.empty() && k.t_s - t0 > budget_s + 1e-9) break;
+    k.t_s += plan.move_start_s - t0;
+    k.p_world.z() += config.height_m;
+    plan.coarse.push_back(k);
+  }
+  plan.move_end_s = plan.coarse.back().t_s;
+  plan.end_s = std::max(plan.move_end_s + config.rest_end_s, total_duration_s);
+  return plan;
+}
+
+}  // namespace
+
+std::vector<Keyframe> walkKeyframes(const std::vector<Waypoint>& waypoints, const WalkConfig& config,
+                                    double total_duration_s) {
+  return gaitKeyframes(planWalk(waypoints, config, total_duration_s), config);
+}
+
+SplineMotion walkMotion(const std::vector<Waypoint>& waypoints, const WalkConfig& config, double total_duration_s) {
+  return motionOf(planWalk(waypoints, config, total_duration_s), config);
+}
+
+SplineMotion recordedMotion(const std::vector<Keyframe>& recorded, const WalkConfig& config, double total_duration_s) {
+  if (recorded.empty()) return SplineMotion();
+  return motionOf(planRecorded(recorded, config, total_duration_s), config);
 }
 
 Eigen::Vector3d MotionState::specificForce() const {

@@ -396,9 +396,63 @@ Scenario ramp() {
   return s;
 }
 
+#include "tiers_indoor08.inc"
+
+// A lab (14.5 x 7.2 x 3 m) driven along a real platform's recorded motion (the TIERS dataset's
+// indoor08 ground truth, levelled and smoothed by scripts/level_recorded_motion.py): benches along
+// the walls, shelves, two pillars, equipment placed clear of the recorded path.
+Scenario lab() {
+  Scenario s;
+  s.name = "lab";
+  const double x0 = -3.0, x1 = 11.5, y0 = -3.0, y1 = 4.2, H = 3.0;
+  Builder b;
+  b.add(x0 - 0.3, y0 - 0.3, -0.2, x1 + 0.3, y1 + 0.3, 0, 60);
+  b.add(x0 - 0.3, y0 - 0.3, H, x1 + 0.3, y1 + 0.3, H + 0.2, 200);
+  b.add(x0 - 0.3, y0 - 0.3, 0, x0, y1 + 0.3, H, 150);
+  b.add(x1, y0 - 0.3, 0, x1 + 0.3, y1 + 0.3, H, 150);
+  b.wallAlongX(x0, x1, y0, -1, H, {1.5}, 1.2, 0.25, 140, 80);
+  b.wallAlongX(x0, x1, y1, +1, H, {7.8}, 0.9, 0.25, 140, 90);
+  for (double x : {-1.0, 3.5, 8.0}) {  // benches along the south wall, instruments on them
+    b.add(x, y0, 0.88, x + 2.4, y0 + 0.8, 0.92, 120);
+    b.add(x, y0, 0, x + 0.05, y0 + 0.8, 0.88, 90);
+    b.add(x + 2.35, y0, 0, x + 2.4, y0 + 0.8, 0.88, 90);
+    b.add(x + 0.6, y0 + 0.1, 0.92, x + 1.1, y0 + 0.5, 1.3, 40);
+  }
+  b.add(x0, -1.5, 0, x0 + 0.45, 2.5, 2.1, 170);  // shelves on the west wall
+  b.add(x1 - 0.6, -2.6, 0, x1, -1.2, 1.8, 110);   // a cabinet and a whiteboard on the east wall
+  b.add(x1 - 0.03, 0.2, 0.9, x1, 2.4, 2.0, 240);
+  b.add(0.5, y1 - 0.6, 0, 5.5, y1, 1.9, 130);  // tall shelves on the north wall
+  for (double x : {2.0, 6.5}) b.add(x - 0.25, 2.75, 0, x + 0.25, 3.25, H, 160);  // pillars
+  for (double x : {-1.5, 2.5, 6.5, 10.0}) b.add(x, 0.4, H - 0.06, x + 1.2, 0.7, H, 250);
+  b.add(4.5, y0, H - 0.4, 4.8, y1, H, 150);  // a beam
+  for (const auto& row : kTiersIndoor08) {
+    Keyframe k;
+    k.t_s = row[0];
+    k.p_world = Eigen::Vector3d(row[1], row[2], row[3]);
+    k.yaw_rad = row[4];
+    k.pitch_rad = row[5];
+    k.roll_rad = row[6];
+    s.recorded.push_back(k);
+  }
+  for (std::size_t i = 0; i < s.recorded.size(); i += 5) {
+    const Keyframe& k = s.recorded[i];
+    s.waypoints.push_back({k.p_world.x(), k.p_world.y(), k.yaw_rad});
+  }
+  Lcg rng{777};
+  addClutter(b, rng, 12, x0 + 0.5, x1 - 0.7, y0 + 0.9, y1 - 0.7, s.waypoints, 0.7, 1.0, 1.4);
+  s.boxes = b.boxes;
+  s.walk.height_m = 0.7;  // a platform's LiDARs, not a person's
+  s.walk.bob_amplitude_m = 0.0;  // the recorded motion carries the platform's own
+  s.walk.sway_rad = 0.0;
+  s.walk.nod_rad = 0.0;
+  return s;
+}
+
 }  // namespace
 
-std::vector<std::string> scenarioNames() { return {"office", "corridor", "corridor_blind", "hall", "stairs", "ramp"}; }
+std::vector<std::string> scenarioNames() {
+  return {"office", "corridor", "corridor_blind", "hall", "stairs", "ramp", "lab"};
+}
 
 Scenario carriedByHand(Scenario s) {
   const double speed_m_s = s.walk.speed_m_s;
@@ -418,7 +472,10 @@ Scenario makeScenario(const std::string& name) {
   if (name == "hall") return hall();
   if (name == "stairs") return stairs();
   if (name == "ramp") return ramp();
-  throw Error("unknown scenario '" + name + "'; valid scenarios: office, corridor, corridor_blind, hall, stairs, ramp");
+  if (name == "lab") return lab();
+  std::string valid;
+  for (const std::string& n : scenarioNames()) valid += (valid.empty() ? "" : ", ") + n;
+  throw Error("unknown scenario '" + name + "'; valid scenarios: " + valid);
 }
 
 }  // namespace mmlio::sim

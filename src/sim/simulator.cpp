@@ -24,7 +24,8 @@ Simulator::Simulator(SimOptions options) : options_(std::move(options)) {
   scenario_ = makeScenario(options_.scenario);
   if (options_.handheld) scenario_ = carriedByHand(scenario_);
   scene_ = Scene(scenario_.boxes);
-  motion_ = walkMotion(scenario_.waypoints, scenario_.walk, options_.duration_s);
+  motion_ = scenario_.recorded.empty() ? walkMotion(scenario_.waypoints, scenario_.walk, options_.duration_s)
+                                       : recordedMotion(scenario_.recorded, scenario_.walk, options_.duration_s);
   livox_.pattern = options_.livox_pattern;
   velodyne_beams_ = velodyneBeams(velodyne_);
   drawMount();

@@ -97,5 +97,51 @@ TEST(Degeneracy, RemappingKeepsThePredictionAlongTheWeakAxisAndTheSolutionAcross
   EXPECT_TRUE(q.isApprox(q_solved));  // rotation is observed: untouched
 }
 
+// The drift model: unobserved, the position variance grows as a white acceleration's (q^2 t^3 / 3);
+// observed along x, only x shrinks.
+TEST(PredictionDrift, GrowsWhereUnobservedAndShrinksOnlyAlongWhatTheLidarsObserve) {
+  PredictionDrift drift;
+  const double q = 0.05;
+  for (int k = 0; k < 20; ++k) drift.predict(0.1, q);
+  const double expected = q * q * 8.0 / 3.0;  // t = 2 s
+  EXPECT_NEAR(drift.positionCovariance()(0, 0), expected, 1e-3 * expected);
+  EXPECT_NEAR(drift.positionCovariance()(2, 2), expected, 1e-3 * expected);
+  EXPECT_NEAR(drift.positionCovariance()(0, 1), 0.0, 1e-12);
+
+  std::vector<MapMatch> wall = endWall(400);  // a wall across x: x observed, y and z not
+  const Degeneracy d = analyseDegeneracy(matchInformation(wall, Eigen::Isometry3d::Identity(), 0.1), DegeneracyConfig());
+  drift.update(d, 0.05);
+  EXPECT_LT(drift.positionCovariance()(0, 0), 0.05 * 0.05 / 300.0);
+  EXPECT_NEAR(drift.positionCovariance()(1, 1), expected, 1e-3 * expected);
+  EXPECT_NEAR(drift.positionCovariance()(2, 2), expected, 1e-3 * expected);
+}
+
+// Fifteen end-wall points do not beat a fresh prediction; after seconds without them they do.
+// Five never do: too few to tell a surface from a wrong association.
+TEST(Degeneracy, WeakEvidenceCountsOnceThePredictionHasDrifted) {
+  std::vector<MapMatch> m = corridorMatches(), five = corridorMatches();
+  for (const MapMatch& w : endWall(15)) m.push_back(w);
+  for (const MapMatch& w : endWall(5)) five.push_back(w);
+  const Matrix6d info = matchInformation(m, Eigen::Isometry3d::Identity(), 0.1);
+  const double sigma = 0.05;
+  PredictionDrift drift;
+  drift.predict(0.1, 0.05);
+  const Eigen::Matrix3d fresh = drift.positionCovariance();
+  EXPECT_TRUE(analyseDegeneracy(info, DegeneracyConfig(), &fresh, sigma).translation_degenerate);
+  for (int k = 0; k < 20; ++k) drift.predict(0.1, 0.05);
+  const Eigen::Matrix3d drifted = drift.positionCovariance();
+  const Degeneracy d = analyseDegeneracy(info, DegeneracyConfig(), &drifted, sigma);
+  EXPECT_FALSE(d.translation_degenerate);
+  EXPECT_LE(d.translation_thresholds(0), 10.0);
+  EXPECT_TRUE(analyseDegeneracy(matchInformation(five, Eigen::Isometry3d::Identity(), 0.1), DegeneracyConfig(),
+                                &drifted, sigma)
+                  .translation_degenerate);
+  // Without any evidence along the axis, the drifted prediction is still all there is.
+  const Degeneracy none = analyseDegeneracy(matchInformation(corridorMatches(), Eigen::Isometry3d::Identity(), 0.1),
+                                            DegeneracyConfig(), &drifted, sigma);
+  EXPECT_TRUE(none.translation_degenerate);
+  EXPECT_GT(std::abs(none.weak_translation.x()), 0.999);
+}
+
 }  // namespace
 }  // namespace mmlio::estimator

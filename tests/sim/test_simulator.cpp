@@ -340,5 +340,36 @@ TEST(Simulator, ImuNoiseAndAccelerometerBiasFollowTheOptions) {
   EXPECT_NEAR(std::sqrt(sq_l / sq_q), 10.0, 1.5);
 }
 
+// The lab replays a real platform's recorded motion (levelled, smoothed): at rest, then the
+// recording's own pace and turns, level within a few degrees, and always clear of the furniture.
+TEST(Simulator, LabReplaysTheRecordedMotionLevelAndClearOfTheFurniture) {
+  const Scenario lab = makeScenario("lab");
+  ASSERT_GT(lab.recorded.size(), 800u);
+  const Simulator sim(opts("lab", 0));
+  const SplineMotion& m = sim.motion();
+  const double rest_s = lab.walk.rest_start_s;
+  EXPECT_NEAR(m.durationS(), lab.recorded.back().t_s + rest_s + lab.walk.rest_end_s, 0.1);
+  EXPECT_LT(m.at(0.5 * rest_s).v_world.norm(), 1e-9);
+  double max_speed = 0, max_tilt = 0, max_off = 0;
+  for (const Keyframe& k : lab.recorded) {
+    const MotionState s = m.at(k.t_s + rest_s);
+    max_speed = std::max(max_speed, s.v_world.norm());
+    const Eigen::Matrix<double, 6, 1> c = m.coordinates(k.t_s + rest_s);
+    max_tilt = std::max({max_tilt, std::abs(c[4]), std::abs(c[5])});
+    const Eigen::Vector3d recorded = k.p_world + Eigen::Vector3d(0, 0, lab.walk.height_m);
+    if (k.t_s > 1.0) max_off = std::max(max_off, (s.p_world - recorded).norm());
+    EXPECT_GT(sim.scene().distanceToSurface(s.p_world), 0.5) << k.t_s;
+  }
+  EXPECT_LT(max_off, 0.05);  // the recording, smoothed on 0.25 s knots
+  EXPECT_GT(max_speed, 0.8);
+  EXPECT_LT(max_speed, 1.6);
+  EXPECT_LT(max_tilt, 2.0 * M_PI / 180);
+  EXPECT_GT(sim.pathLengthM(), 45.0);
+  // A shorter sequence cuts the recording and still ends at rest.
+  const Simulator cut(opts("lab", 20.0));
+  EXPECT_NEAR(cut.durationS(), 20.0, 0.05);
+  EXPECT_LT(cut.motion().at(19.9).v_world.norm(), 1e-9);
+}
+
 }  // namespace
 }  // namespace mmlio::sim

@@ -33,6 +33,17 @@ struct DegeneracyConfig {
   // A translation direction, or a rotation axis (per metre of lever arm), worth fewer effective
   // points than this is degenerate.
   double min_points = 30.0;
+  // How fast the IMU prediction drifts along a translation direction the LiDARs leave unobserved,
+  // as a white acceleration error (m/s^2/sqrt(Hz)) standing for the accelerometer bias and tilt the
+  // estimator has not yet pinned down. The longer a direction goes unobserved, the less the
+  // prediction is worth there and the weaker the LiDAR evidence that beats it: that direction's
+  // threshold falls below min_points (a wall the solid-state LiDAR has faced for seconds still
+  // says where the rig is along it better than the IMU alone). 0: the fixed threshold.
+  double drift_m_s2 = 0.05;
+  // ... but never below this many effective points: a handful of matches along a direction is as
+  // likely a wrong association (a slab's top face matched to its underside on a staircase) as a
+  // surface seen at a grazing angle.
+  double min_points_drifted = 10.0;
 };
 
 struct Degeneracy {
@@ -42,13 +53,33 @@ struct Degeneracy {
   Eigen::Vector3d weak_translation = Eigen::Vector3d::UnitX();  // its direction (world frame)
   Eigen::Matrix3d translation_basis = Eigen::Matrix3d::Identity();  // eigenvectors, ascending
   Eigen::Vector3d translation_eigenvalues = Eigen::Vector3d::Zero();
+  Eigen::Vector3d translation_thresholds = Eigen::Vector3d::Zero();  // below which each is degenerate
   Eigen::Matrix3d rotation_basis = Eigen::Matrix3d::Identity();
   Eigen::Vector3d rotation_eigenvalues = Eigen::Vector3d::Zero();
 
   bool any() const { return translation_degenerate || rotation_degenerate; }
 };
 
-Degeneracy analyseDegeneracy(const Matrix6d& information, const DegeneracyConfig& cfg);
+/// With `position_covariance_m2` (the prediction's, PredictionDrift), a translation direction
+/// is also observed when its information beats the prediction's: more than sigma_m^2 / variance
+/// effective points (sigma_m: the point residual's standard deviation).
+Degeneracy analyseDegeneracy(const Matrix6d& information, const DegeneracyConfig& cfg,
+                             const Eigen::Matrix3d* position_covariance_m2 = nullptr, double sigma_m = 0.0);
+
+/// The covariance of the IMU prediction's position and velocity error (world frame) from sweep to
+/// sweep: grown by DegeneracyConfig::drift_m_s2 over each interval, shrunk by the translation
+/// information each registration used (a Kalman filter of the covariance alone).
+class PredictionDrift {
+ public:
+  void predict(double dt_s, double drift_m_s2);
+  /// The directions of `d` its thresholds call observed, with their information.
+  void update(const Degeneracy& d, double sigma_m);
+  Eigen::Matrix3d positionCovariance() const { return P_.topLeftCorner<3, 3>(); }
+  void reset() { P_.setZero(); }
+
+ private:
+  Matrix6d P_ = Matrix6d::Zero();  // position, velocity
+};
 
 /// Solution remapping: the solved pose and velocity keep the prediction's components along every
 /// translation direction (and rotation axis) below the thresholds; observed directions keep the

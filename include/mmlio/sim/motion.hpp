@@ -91,5 +91,10 @@ class SplineMotion {
 /// The motion of a walk (walkKeyframes), on knots of config.knot_interval_s.
 SplineMotion walkMotion(const std::vector<Waypoint>& waypoints, const WalkConfig& config,
                         double total_duration_s = 0.0);
+/// A recorded motion (poses over a floor at z = 0; config.height_m is added) replayed as recorded,
+/// between rests of config.rest_start_s and rest_end_s, with config's gait on top. A
+/// `total_duration_s` (> 0) shorter than the recording cuts it; the rest fills up to it.
+SplineMotion recordedMotion(const std::vector<Keyframe>& recorded, const WalkConfig& config,
+                            double total_duration_s = 0.0);
 
 }  // namespace mmlio::sim

@@ -13,6 +13,8 @@
 //            landing); carried by hand up, through the upper floor, down and back.
 //   ramp     30 x 8 x 4.5 m with a 12 m ramp (1:12) up to a 1 m platform, driven like a robot that
 //            pitches with the slope: up, round on the platform, down and home.
+//   lab      14.5 x 7.2 x 3 m, benches, shelves, pillars; driven along a real platform's recorded
+//            6-DoF motion (TIERS dataset, indoor08: 90 s, 52 m, back and forth), not a planned walk.
 
 #include <string>
 #include <vector>
@@ -26,10 +28,11 @@ struct Scenario {
   std::string name;
   std::vector<Box> boxes;
   std::vector<Waypoint> waypoints;  // first == last (up to whole turns of yaw)
+  std::vector<Keyframe> recorded;   // when set, the motion as recorded (waypoints then only trace it)
   WalkConfig walk;
 };
 
-/// "office", "corridor", "corridor_blind", "hall", "stairs", "ramp".
+/// "office", "corridor", "corridor_blind", "hall", "stairs", "ramp", "lab".
 std::vector<std::string> scenarioNames();
 /// Throws mmlio::Error naming the valid scenarios for an unknown name.
 Scenario makeScenario(const std::string& name);
@@ -38,7 +41,7 @@ Scenario makeScenario(const std::string& name);
 /// turns up to 150 deg/s.
 WalkConfig handheldWalk();
 /// The scenario's route carried by hand: the hand-held gait at the route's speed, and deliberate
-/// looks 25 deg down and 20 deg up between waypoints.
+/// looks 25 deg down and 20 deg up between waypoints (a recorded motion gets the gait only).
 Scenario carriedByHand(Scenario s);
 
 }  // namespace mmlio::sim

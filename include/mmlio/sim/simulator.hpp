@@ -44,7 +44,7 @@ struct ImuNoiseConfig {
 };
 
 struct SimOptions {
-  std::string scenario;                 // "office", "corridor", "corridor_blind", "hall", "stairs", "ramp"
+  std::string scenario;                 // one of scenarioNames()
   double duration_s = 0;                // 0: the scenario's full walk (office ~40 s, corridor ~110 s, hall ~150 s)
   std::uint64_t seed = 1;               // noise seed (the scene and the walk do not depend on it)
   double velodyne_time_offset_s = 0;    // Velodyne stamps are written as t_true - offset
