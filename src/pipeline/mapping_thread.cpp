@@ -27,6 +27,7 @@ void MappingThread::addSweep(estimator::SweepResult sweep) {
   not_full_.wait(lock, [this] { return queue_.size() < capacity_ || closing_; });
   if (closing_) return;
   queue_.push_back(std::move(sweep));
+  queue_high_water_ = std::max(queue_high_water_, queue_.size());
   lock.unlock();
   not_empty_.notify_one();
 }
@@ -60,6 +61,11 @@ void MappingThread::run() {
 StageStats MappingThread::timing() const {
   std::lock_guard<std::mutex> lock(backend_mutex_);
   return timing_;
+}
+
+std::size_t MappingThread::queueHighWater() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return queue_high_water_;
 }
 
 MappingBackend& MappingThread::finish() {

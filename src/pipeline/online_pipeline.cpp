@@ -113,7 +113,11 @@ void OnlinePipeline::drain(bool all) {
   if (all) {
     for (auto& s : aligner_.flush()) pending_.push_back(std::move(s));
   }
-  while (!pending_.empty() && (all || pending_.front().end_ns <= odometry_.lastImuNs())) {
+  waiting_high_water_ = std::max(waiting_high_water_, pending_.size());
+  const auto ready = [&](const lidar::AlignedSweep& front) {
+    return all || front.end_ns <= odometry_.lastImuNs() || pending_.back().end_ns - front.end_ns > kMaxImuWaitNs;
+  };
+  while (!pending_.empty() && ready(pending_.front())) {
     estimator::SweepResult r = odometry_.process(std::move(pending_.front()));
     pending_.pop_front();
     ++processed_;

@@ -164,6 +164,10 @@ Json toJson(const RunReport& r) {
         {{"query_s", l.query_s}, {"match_s", l.match_s}, {"fitness_m", l.fitness_m}, {"overlap", l.overlap}});
   if (!r.mapping_error.empty()) mapping["error"] = r.mapping_error;
   rep["timing_backend"] = r.timing_backend.toJson();
+  rep["memory"] = {{"sweeps_waiting_for_imu_max", r.memory.sweeps_waiting_for_imu_max},
+                   {"mapping_queue_max", r.memory.mapping_queue_max},
+                   {"mapping_queue_capacity", r.memory.mapping_queue_capacity},
+                   {"peak_rss_mb", r.memory.peak_rss_mb}};
 
   const RunReport::Dynamic& d = r.dynamic;
   rep["dynamic"] = {{"enabled", d.enabled},

@@ -1,5 +1,7 @@
 #include "mmlio/pipeline/system.hpp"
 
+#include <sys/resource.h>
+
 #include <filesystem>
 
 #include "mmlio/core/log.hpp"
@@ -119,6 +121,11 @@ RunReport System::report() const {
     r.dynamic.map_points_removed = b.ghostRemoval().removed_points;
   });
   r.mapping_error = backend_error_;
+  r.memory.sweeps_waiting_for_imu_max = online_.waitingHighWater();
+  r.memory.mapping_queue_max = mapping_.queueHighWater();
+  r.memory.mapping_queue_capacity = mapping_.capacity();
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) == 0) r.memory.peak_rss_mb = usage.ru_maxrss / 1024.0;  // KiB on Linux
   return r;
 }
 

@@ -300,3 +300,28 @@ TEST(InputGates, ALossOfAllDataWhileATurnEndsIsBridgedByTryingSeveralTurns) {
 }
 
 }  // namespace mmlio
+
+namespace mmlio {
+
+// An IMU that stops for good: the sweeps after it do not wait for it until the end of the stream
+// (a long bag would hold all of them in memory) but go on, LiDAR-only, two seconds behind the LiDARs.
+TEST(InputGates, SweepsWaitForAnImuThatStoppedAtMostTwoSeconds) {
+  const sim::Simulator sim = office(14.0);
+  const Stamp imu_ends = sim.startNs() + fromSec(4.0);
+  std::size_t degraded = 0, delivered_while_feeding = 0, fed = 0;
+  const std::size_t scans = sim.numLivoxFrames() + sim.numVelodyneSweeps();
+  pipeline::OnlinePipeline online(testing::simRigConfig(sim), "hvi", [&](const estimator::SweepResult& r) {
+    degraded += r.status == estimator::SweepResult::Status::kDegraded;
+    if (r.state.stamp_ns > imu_ends && fed < scans) ++delivered_while_feeding;
+  });
+  testing::replay(
+      sim, online, [&](int, LidarScan&) { ++fed; },
+      [&](std::size_t, ImuSample& s) { if (s.stamp_ns >= imu_ends) s.stamp_ns = 0; });
+  const std::size_t bound = pipeline::OnlinePipeline::kMaxImuWaitNs / 100000000LL + 3;  // 10 Hz sweeps
+  EXPECT_LE(online.waitingHighWater(), bound);
+  EXPECT_GT(delivered_while_feeding, 50u);  // 10 s after the IMU stopped, less the last 2 s
+  EXPECT_GT(degraded, 80u);
+  EXPECT_EQ(online.sweepsProcessed(), static_cast<std::size_t>(sim.numLivoxFrames()) - 1);
+}
+
+}  // namespace mmlio

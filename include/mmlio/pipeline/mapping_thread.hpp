@@ -33,6 +33,9 @@ class MappingThread {
   MappingBackend& backend() { return backend_; }
   /// Milliseconds the back end spent per sweep (on its own thread); a copy, safe while running.
   StageStats timing() const;
+  /// Most sweeps queued at once (at most the capacity) and the capacity.
+  std::size_t queueHighWater() const;
+  std::size_t capacity() const { return capacity_; }
   /// Runs f(backend) between two of the back end's sweeps, for live queries from another thread
   /// (corrected path, map); the back end waits meanwhile.
   template <class F>
@@ -51,7 +54,8 @@ class MappingThread {
   static constexpr std::size_t kTrimEveryKeyframes = 10;
   std::size_t keyframes_ = 0;  // seen by the worker
   std::deque<estimator::SweepResult> queue_;
-  std::mutex mutex_;                   // the queue
+  std::size_t queue_high_water_ = 0;
+  mutable std::mutex mutex_;           // the queue
   mutable std::mutex backend_mutex_;   // the back end and its timing
   std::condition_variable not_empty_, not_full_;
   bool closing_ = false, finished_ = false;

@@ -41,6 +41,13 @@ class OnlinePipeline {
   };
   const ScanDrops& scanDrops() const { return scan_drops_; }
   std::size_t sweepsProcessed() const { return processed_; }
+  /// Most sweeps that waited at once for the IMU to cover them (bounded: see kMaxImuWaitNs).
+  std::size_t waitingHighWater() const { return waiting_high_water_; }
+
+  /// A sweep waits for the IMU to cover its end, but only until the LiDARs are this far past it:
+  /// then it goes on without (registered by the LiDARs alone, counted as degraded). An IMU that
+  /// stopped would otherwise keep every later sweep in memory until the end of the stream.
+  static constexpr Stamp kMaxImuWaitNs = 2000000000LL;
 
   /// A jump of the whole stream's time base: the IMU and every LiDAR resumed together `jump_s`
   /// after their last data (a clock re-sync, bags joined, a paused recording). The pipeline then
@@ -72,6 +79,7 @@ class OnlinePipeline {
   std::deque<lidar::AlignedSweep> pending_;
   SweepCallback on_sweep_;
   std::size_t processed_ = 0;
+  std::size_t waiting_high_water_ = 0;
 };
 
 }  // namespace mmlio::pipeline

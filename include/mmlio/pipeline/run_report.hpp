@@ -54,6 +54,12 @@ struct RunReport {
     std::size_t map_points_judged = 0, map_points_removed = 0, dynamic_map_points = 0;
     double map_assembly_s = 0.0;
   };
+  // High-water marks of what the run held: the queues are bounded, so the resident memory is too.
+  struct Memory {
+    std::size_t sweeps_waiting_for_imu_max = 0;  // at most ~2 s of sweeps (OnlinePipeline)
+    std::size_t mapping_queue_max = 0, mapping_queue_capacity = 0;  // sweeps queued for the back end
+    double peak_rss_mb = 0.0;  // the process's resident memory, MB
+  };
   struct Outputs {
     std::string trajectory, map, dynamic_map;
     std::size_t poses = 0, map_points = 0;
@@ -73,6 +79,7 @@ struct RunReport {
   LoopFigures mapping;
   std::string mapping_error;  // why the back end stopped, if it failed
   Dynamic dynamic;
+  Memory memory;
   Outputs outputs;
   std::optional<eval::EvalResult> evaluation;  // with ground truth
   std::map<std::string, std::string> figures;
