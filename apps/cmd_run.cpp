@@ -22,6 +22,7 @@ struct RunArgs {
   bool no_progress = false, no_loop = false;
   double duration_s = 0.0;
   double max_degraded_percent = 25.0;
+  double max_drift_m = 0.3;
 };
 
 // Exit codes (README): 0 trustworthy outputs, 1 error (nothing usable written), 2 internal error,
@@ -79,6 +80,7 @@ void run(const RunArgs& a) {
   options.max_duration_s = a.duration_s;
   options.stop = &g_stop;
   options.max_degraded_fraction = a.max_degraded_percent / 100.0;
+  options.max_drift_sigma_m = a.max_drift_m;
   std::signal(SIGINT, onStopSignal);
   std::signal(SIGTERM, onStopSignal);
   const pipeline::RunResult r = pipeline::runBag(options);
@@ -118,6 +120,11 @@ void registerRunCommand(CLI::App& app) {
                   "poses cover less than 100 - this % of the stream")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 100.0));
+  cmd->add_option("--max-drift", args->max_drift_m,
+                  "Exit code 3 also when the IMU alone carried the position along a direction the LiDARs did not "
+                  "observe long enough to drift by more than this (m, 1 sigma; report: degeneracy.max_drift_sigma_m)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   cmd->callback([args] { run(*args); });
 }
 

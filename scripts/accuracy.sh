@@ -46,9 +46,12 @@ for sc in scenes:
             cells.setdefault((r["seed"], r["noise"]), {})[r["run"]] = r
     for run in sorted({r["run"] for r in rows if r["scene"] == sc}, key=lambda m: order.get(m, 9)):
         rs = [r for r in rows if r["scene"] == sc and r["run"] == run]
-        ok = [r for r in rs if r["status"] == "ok" and "ate_rmse_m" in r]
+        ok = [r for r in rs if r["status"] in ("ok", "untrusted") and "ate_rmse_m" in r]
+        untrusted = sum(r["status"] == "untrusted" for r in ok)
         ate = [r["ate_rmse_m"] for r in ok]
-        e2e = [100 * r["end_to_end_m"] / r["path_length_m"] for r in ok if r.get("path_length_m")]
+        # How far the end is off, beyond the true end-to-end distance (0 for routes that return).
+        e2e = [100 * abs(r["end_to_end_m"] - r.get("gt_end_to_end_m", 0.0)) / r["path_length_m"]
+               for r in ok if r.get("path_length_m")]
         mp = [r["map_median_m"] for r in ok if "map_median_m" in r]
         off = [r["map_off_surface_fraction"] for r in ok if "map_off_surface_fraction" in r]
         failed = len(rs) - len(ok)
@@ -61,7 +64,8 @@ for sc in scenes:
                     if others:
                         total += 1; wins += c["hvi"]["ate_rmse_m"] <= min(others) * 1.0 + 1e-9
             beat = f"{wins}/{total}"
-        print(f"| {sc} | {run} | {len(ok)}{f' ({failed} failed)' if failed else ''} | "
+        notes = ", ".join(n for n in (f"{untrusted} untrusted" if untrusted else "", f"{failed} failed" if failed else "") if n)
+        print(f"| {sc} | {run} | {len(ok)}{f' ({notes})' if notes else ''} | "
               f"{fmt(statistics.median(ate)) if ate else 'n/a'} | {fmt(max(ate)) if ate else 'n/a'} | "
               f"{f'{statistics.median(e2e):.3f} / {max(e2e):.3f}' if e2e else 'n/a'} | "
               f"{fmt(statistics.median(mp), 1000, 'mm', 1) if mp else 'n/a'} | "

@@ -97,6 +97,11 @@ void PredictionDrift::predict(double dt_s, double drift_m_s2) {
   P_ = F * P_ * F.transpose() + Q;
 }
 
+double PredictionDrift::largestSigmaM() const {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(positionCovariance(), Eigen::EigenvaluesOnly);
+  return std::sqrt(std::max(0.0, es.eigenvalues().maxCoeff()));
+}
+
 void PredictionDrift::update(const Degeneracy& d, double sigma_m) {
   Eigen::Matrix3d information = Eigen::Matrix3d::Zero();  // of the position, 1/m^2
   for (int i = 0; i < 3; ++i) {

@@ -676,6 +676,7 @@ SweepResult Odometry::process(lidar::AlignedSweep sweep) {
                               ? d.registerSweep(matched, pre, prev, prev_velocity_guessed, &state, &out)
                               : d.registerAcrossGap(matched, prev, prev_velocity_guessed, unobserved_s, &state, &out);
     if (out.registered && out.correspondences >= kMinCorrespondences) d.drift.update(out.degeneracy, d.cfg.lidar_sigma_m);
+    out.drift_sigma_m = d.drift.largestSigmaM();
     if (out.correspondences < kMinCorrespondences) {
       tracked = false;
       state = predicted;

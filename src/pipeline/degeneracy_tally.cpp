@@ -25,6 +25,10 @@ void DegeneracyTally::add(const estimator::SweepResult& r) {
     // The same threshold as the sweep's: this LiDAR alone would have left a direction unobserved.
     if (l.translation_points < min_points_) ++p.degenerate_alone;
   }
+  if (r.status != estimator::SweepResult::Status::kInitializing && r.drift_sigma_m > max_drift_sigma_m_) {
+    max_drift_sigma_m_ = r.drift_sigma_m;
+    max_drift_at_ns_ = r.state.stamp_ns;
+  }
   if (!r.registered) {
     in_spell_ = false;
     return;
@@ -52,6 +56,7 @@ void DegeneracyTally::add(const estimator::SweepResult& r) {
     s.end_ns = r.state.stamp_ns;
     ++s.sweeps;
     ++s.axes[axis];
+    s.max_drift_sigma_m = std::max(s.max_drift_sigma_m, r.drift_sigma_m);
   }
 }
 
@@ -68,6 +73,8 @@ Json DegeneracyTally::toJson(Stamp begin_ns) const {
   for (const auto& [name, n] : weak_axis_) axes[name] = n;
   j["weak_direction"] = axes;
   j["median_weakest_translation_points"] = median(weakest_points_);
+  j["max_drift_sigma_m"] = max_drift_sigma_m_;
+  j["max_drift_at_s"] = max_drift_at_ns_ > 0 ? toSec(max_drift_at_ns_ - begin_ns) : 0.0;
   Json spells = Json::array();
   for (const Spell& s : spells_) {
     Json e = Json::object();
@@ -79,6 +86,7 @@ Json DegeneracyTally::toJson(Stamp begin_ns) const {
     for (const auto& [name, n] : s.axes)
       if (n > most) most = n, axis = name;
     e["weak_direction"] = axis;
+    e["max_drift_sigma_m"] = s.max_drift_sigma_m;
     spells.push_back(e);
   }
   j["spells"] = spells;

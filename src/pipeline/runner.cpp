@@ -138,6 +138,10 @@ RunResult runBag(const RunOptions& options) {
     else if (report.sweeps.coverage < 1.0 - limit)
       std::snprintf(why, sizeof why, "poses cover %.0f %% of the stream after initialisation (limit %.0f %%)",
                     100.0 * report.sweeps.coverage, 100.0 * (1.0 - limit));
+    else if (const double drift = report.degeneracy.value("max_drift_sigma_m", 0.0); drift > options.max_drift_sigma_m)
+      std::snprintf(why, sizeof why,
+                    "the IMU carried the position alone long enough to drift by %.2f m (1 sigma, at %.0f s; limit %.2f m)",
+                    drift, report.degeneracy.value("max_drift_at_s", 0.0), options.max_drift_sigma_m);
     result.untrusted = why;
   }
   if (!result.complete) result.untrusted = "the bag ended early: " + result.error;

@@ -246,6 +246,14 @@ TEST(RunBag, OutputsAreFlaggedUntrustedWhenTooManySweepsAreDegraded) {
   options.bag_path = officeBag(sim, "mmlio_clean.bag", [](const ImuSample&) { return true; });
   const RunResult clean = runBag(options);
   EXPECT_TRUE(clean.untrusted.empty()) << clean.untrusted;
+  // The report's drift bound: what the IMU carried alone. Millimetres in the office; a bound below
+  // what the run reached makes it untrusted, with the figure.
+  const double drift = toJson(clean.report)["degeneracy"]["max_drift_sigma_m"].get<double>();
+  EXPECT_GT(drift, 0.0);
+  EXPECT_LT(drift, 0.05);
+  RunOptions strict = options;
+  strict.max_drift_sigma_m = 0.5 * drift;
+  EXPECT_NE(runBag(strict).untrusted.find("drift"), std::string::npos);
 
   // The IMU stops 5 s into the 8 s: the last sweeps are registered by the LiDARs alone.
   options.bag_path = officeBag(sim, "mmlio_imu_stops.bag", [&](const ImuSample& s) { return s.stamp_ns < imu_ends; });

@@ -75,6 +75,8 @@ class PredictionDrift {
   /// The directions of `d` its thresholds call observed, with their information.
   void update(const Degeneracy& d, double sigma_m);
   Eigen::Matrix3d positionCovariance() const { return P_.topLeftCorner<3, 3>(); }
+  /// The position's standard deviation along its least observed direction, m.
+  double largestSigmaM() const;
   void reset() { P_.setZero(); }
 
  private:

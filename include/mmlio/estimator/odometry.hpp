@@ -93,6 +93,9 @@ struct SweepResult {
   Degeneracy degeneracy;                // of the scan-to-map registration (valid when registered)
   bool registered = false;              // matched against the map (not the first sweep, not degraded)
   int remapped_directions = 0;          // directions where the IMU prediction was kept
+  // How far the position may have drifted along what the LiDARs have not observed lately: the
+  // largest standard deviation of PredictionDrift after this sweep, m (0 when drift_m_s2 is 0).
+  double drift_sigma_m = 0.0;
   std::vector<Point> points_body;       // de-skewed points in the body frame at the window end
   bool points_body_thinned = false;     // ... only those the map takes (the mapping back end's hand-off)
   std::vector<Point> points_dynamic_body;  // ... those on things that moved in (left out of points_body)

@@ -25,6 +25,7 @@ class DegeneracyTally {
     Stamp start_ns = 0, end_ns = 0;
     std::size_t sweeps = 0;
     std::map<std::string, std::size_t> axes;
+    double max_drift_sigma_m = 0.0;
   };
   struct PerLidar {
     std::size_t judged = 0, degenerate_alone = 0;
@@ -36,6 +37,8 @@ class DegeneracyTally {
   std::map<std::string, std::size_t> weak_axis_;
   std::vector<double> weakest_points_;
   std::vector<Spell> spells_;
+  double max_drift_sigma_m_ = 0.0;
+  Stamp max_drift_at_ns_ = 0;
   bool in_spell_ = false, recording_ = false;
   std::map<std::string, PerLidar> lidars_;
 };

@@ -29,6 +29,8 @@ struct RunOptions {
   double max_degraded_fraction = 0.25; // more degraded sweeps than this, or a trajectory covering
                                        // less than 1 - this of the stream after initialisation:
                                        // RunResult::untrusted says why
+  double max_drift_sigma_m = 0.3;      // ... or, somewhere, the position's uncertainty along what the
+                                       // LiDARs had not observed for a while above this (degeneracy.max_drift_sigma_m)
 };
 
 struct RunResult {
