@@ -77,7 +77,6 @@ class PredictionDrift {
   Eigen::Matrix3d positionCovariance() const { return P_.topLeftCorner<3, 3>(); }
   /// The position's standard deviation along its least observed direction, m.
   double largestSigmaM() const;
-  void reset() { P_.setZero(); }
 
  private:
   Matrix6d P_ = Matrix6d::Zero();  // position, velocity
