@@ -3,13 +3,17 @@
 // over several passes of the same bag (memory must stay flat). Pin it to one core with
 // `taskset -c 1 mmlio bench ...` for the single-core figures.
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <memory>
+#include <vector>
 
 #include "commands.hpp"
+#include "mmlio/core/error.hpp"
 #include "mmlio/core/timer.hpp"
 #include "mmlio/io/calib_file.hpp"
 #include "mmlio/io/rig_config.hpp"
@@ -19,7 +23,7 @@ namespace mmlio::apps {
 namespace {
 
 struct BenchArgs {
-  std::string bag, config, mode, calib;
+  std::string bag, config, mode, calib, curve;
   int repeat = 1;
   int replays = 1;
 };
@@ -28,6 +32,44 @@ double peakRssMb() {
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
   return usage.ru_maxrss / 1024.0;  // Linux reports KiB
+}
+
+double residentMb() {  // now, not the peak: /proc/self/statm's second field, in pages
+  std::ifstream statm("/proc/self/statm");
+  long size_pages = 0, resident_pages = 0;
+  statm >> size_pages >> resident_pages;
+  return static_cast<double>(resident_pages) * static_cast<double>(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
+}
+
+/// One tracked sweep of the run: when (bag and wall time), what the sweep loop spent on it, the
+/// resident memory after it.
+struct CurvePoint {
+  double bag_s, wall_s, sweep_ms, rss_mb;
+};
+
+/// Per pass of a replayed bag (equal spans of bag time): mean ms per sweep and resident memory at
+/// its end, so that growth with revisits and time reads off directly.
+void printPasses(const std::vector<CurvePoint>& curve, int passes) {
+  if (curve.empty() || passes < 2) return;
+  const double span = (curve.back().bag_s + 1e-9) / passes;
+  std::printf("\npass   sweeps   mean ms per sweep (sweep loop)   resident MB at its end\n");
+  std::size_t i = 0;
+  for (int p = 0; p < passes; ++p) {
+    double sum_ms = 0, rss = 0;
+    std::size_t n = 0;
+    for (; i < curve.size() && curve[i].bag_s < (p + 1) * span; ++i, ++n) {
+      sum_ms += curve[i].sweep_ms;
+      rss = curve[i].rss_mb;
+    }
+    std::printf("%4d %8zu %18.2f %30.0f\n", p + 1, n, n ? sum_ms / static_cast<double>(n) : 0.0, rss);
+  }
+}
+
+void writeCurve(const std::string& path, const std::vector<CurvePoint>& curve) {
+  std::ofstream out(path);
+  out << "bag_s,wall_s,sweep_ms,rss_mb\n";
+  for (const CurvePoint& c : curve) out << c.bag_s << ',' << c.wall_s << ',' << c.sweep_ms << ',' << c.rss_mb << '\n';
+  if (!out) throw Error("cannot write the curve to '" + path + "'");
 }
 
 double cpuSeconds() {  // user + system time of every thread of this process so far
@@ -45,7 +87,19 @@ void bench(const BenchArgs& a) {
   options.mode = a.mode;
   options.progress = false;
   options.replays = a.replays;
+  if (!a.curve.empty() && !std::ofstream(a.curve)) throw Error("cannot write the curve to '" + a.curve + "'");
+  std::vector<CurvePoint> curve;
+  Stamp first_ns = 0;
+  Stopwatch curve_wall;
+  options.on_sweep = [&](Stamp stamp_ns, const StageTimes& times_ms) {
+    if (curve.empty()) first_ns = stamp_ns;
+    double ms = 0;
+    for (const auto& stage : times_ms) ms += stage.second;
+    curve.push_back({toSec(stamp_ns - first_ns), curve_wall.elapsedMs() * 1e-3, ms, residentMb()});
+  };
   for (int pass = 1; pass <= a.repeat; ++pass) {
+    curve.clear();
+    curve_wall = Stopwatch();
     Stopwatch wall;
     const double cpu0 = cpuSeconds();
     const pipeline::RunResult r = pipeline::runBag(options);
@@ -58,6 +112,8 @@ void bench(const BenchArgs& a) {
                 pass, a.repeat, r.timing.sweeps(), bag_s, wall_s, bag_s / std::max(1e-9, wall_s), cpu_s,
                 bag_s / std::max(1e-9, cpu_s), peakRssMb());
     if (pass == a.repeat) {
+      printPasses(curve, a.replays);
+      if (!a.curve.empty()) writeCurve(a.curve, curve);
       std::cout << "\nsweep loop (odometry; the back end's hand-off)\n" << r.timing.table();
       std::cout << "\nmapping back end (its own thread)\n" << r.backend_timing.table();
     }
@@ -78,6 +134,9 @@ void registerBenchCommand(CLI::App& app) {
   cmd->add_option("--replay", args->replays,
                   "Play the bag this many times back to back as ONE sequence (long-run memory)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--curve", args->curve,
+                  "Write every sweep's bag time, wall time, ms (sweep loop) and resident MB to this CSV "
+                  "(scripts/plot_bench_curve.py draws it)");
   cmd->add_option("--repeat", args->repeat, "Passes over the bag (memory must stay flat)")->check(CLI::PositiveNumber);
   cmd->callback([args] { bench(*args); });
 }

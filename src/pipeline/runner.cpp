@@ -43,6 +43,7 @@ RunResult runBag(const RunOptions& options) {
 
   io::BagSource source(options.bag_path, io::bagSourceOptions(cfg, mode));
   System system(cfg, mode);
+  system.setTimingObserver(options.on_sweep);
   const estimator::Odometry& odometry = system.odometry();
   ProgressBar progress("mmlio run", options.progress);
   Stopwatch wall;

@@ -45,6 +45,7 @@ void System::onSweep(estimator::SweepResult r) {
     f.bad_frames += l.bad_frame ? 1 : 0;
   }
   StageTimes times = r.times_ms;
+  const Stamp stamp_ns = r.state.stamp_ns;
   // The back end works on the sweep on its own thread: it takes it, or a copy if an observer (the
   // live node publishing the sweep's points) still needs it.
   if (!finished_) {
@@ -53,6 +54,7 @@ void System::onSweep(estimator::SweepResult r) {
   }
   times.emplace_back("mapping_handoff", handoff.lapMs());
   timing_.add(times);
+  if (timing_observer_) timing_observer_(stamp_ns, times);
   if (observer_) observer_(r);
 }
 

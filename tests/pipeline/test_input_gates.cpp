@@ -234,6 +234,36 @@ TEST(RunBag, AStopRequestEndsTheRunWithWhatWasComputedWrittenAndFlagged) {
   std::filesystem::remove(options.bag_path);
 }
 
+TEST(RunBag, TellsItsTimingObserverEverySweepOnceInTimeOrderAcrossReplays) {
+  // What `mmlio bench --curve` records: one call per sweep the report times, later stamps for the
+  // second pass of a replayed bag, and the same stage times the report sums.
+  const sim::Simulator sim = office(6.0);
+  RunOptions options;
+  options.config = testing::simRigConfig(sim);
+  options.config.mapping.loop_enabled = false;
+  options.progress = false;
+  options.replays = 2;
+  options.bag_path = officeBag(sim, "mmlio_timing_observer.bag", [](const ImuSample&) { return true; });
+  std::vector<Stamp> stamps;
+  double observed_ms = 0.0;
+  options.on_sweep = [&](Stamp sweep_end_ns, const StageTimes& times_ms) {
+    stamps.push_back(sweep_end_ns);
+    for (const auto& stage : times_ms) observed_ms += stage.second;
+  };
+  const RunResult r = runBag(options);
+  ASSERT_GT(stamps.size(), 40u);
+  EXPECT_EQ(stamps.size(), r.timing.sweeps());
+  EXPECT_TRUE(std::adjacent_find(stamps.begin(), stamps.end(), std::greater_equal<Stamp>()) == stamps.end());
+  EXPECT_GT(toSec(stamps.back() - stamps.front()), 1.5 * sim.durationS());  // both passes
+  double reported_ms = 0.0;
+  const Json timing = r.timing.toJson();
+  for (const auto& stage : timing.items())
+    if (stage.key() != "total" && stage.key() != "mapping_backend")
+      reported_ms += stage.value()["mean_ms"].get<double>() * stage.value()["samples"].get<double>();
+  EXPECT_NEAR(observed_ms, reported_ms, 1e-3 * reported_ms);
+  std::filesystem::remove(options.bag_path);
+}
+
 TEST(RunBag, OutputsAreFlaggedUntrustedWhenTooManySweepsAreDegraded) {
   const sim::Simulator sim = office(8.0);
   const Stamp imu_ends = sim.startNs() + fromSec(5.0);

@@ -11,6 +11,7 @@
 #include "mmlio/io/rig_config.hpp"
 #include "mmlio/pipeline/run_report.hpp"
 #include "mmlio/pipeline/stage_stats.hpp"
+#include "mmlio/pipeline/system.hpp"
 
 namespace mmlio::pipeline {
 
@@ -29,6 +30,8 @@ struct RunOptions {
   double max_degraded_fraction = 0.25; // more degraded sweeps than this, or a trajectory covering
                                        // less than 1 - this of the stream after initialisation:
                                        // RunResult::untrusted says why
+  System::TimingObserver on_sweep;     // every tracked sweep's stamp and stage times, on the reading
+                                       // thread (bench records its time-and-memory curve)
   double max_drift_sigma_m = 0.3;      // ... or, somewhere, the position's uncertainty along what the
                                        // LiDARs had not observed for a while above this (degeneracy.max_drift_sigma_m)
 };

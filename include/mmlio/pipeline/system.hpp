@@ -25,6 +25,8 @@ class System {
  public:
   /// Every sweep after IMU initialisation, as soon as it is tracked (the node publishes from it).
   using SweepObserver = std::function<void(const estimator::SweepResult&)>;
+  /// Every tracked sweep's stamp and stage times, after its hand-off (no copy of the sweep).
+  using TimingObserver = std::function<void(Stamp sweep_end_ns, const StageTimes& times_ms)>;
 
   /// Throws mmlio::Error on a bad mode or a config with no active LiDAR.
   System(const io::RigConfig& cfg, const std::string& mode, SweepObserver observer = {});
@@ -35,6 +37,7 @@ class System {
   }
   /// scan.sensor names a configured LiDAR (others are ignored); its clock offset is applied here.
   void addScan(LidarScan scan) { online_.addScan(std::move(scan)); }
+  void setTimingObserver(TimingObserver observer) { timing_observer_ = std::move(observer); }
   /// End of the stream: the sweeps still waiting for IMU are processed.
   void flush() { online_.flush(); }
   /// Waits for the back end and runs its final loop check. A failing back end is logged and
@@ -73,6 +76,7 @@ class System {
   io::RigConfig cfg_;
   std::string mode_;
   SweepObserver observer_;
+  TimingObserver timing_observer_;
   MappingThread mapping_;
   DegeneracyTally degeneracy_;
   RunReport::Sweeps sweeps_;
