@@ -5,6 +5,10 @@
 #
 # Usage: bench/fastlio/compare.sh DIR...   (each DIR as written by `mmlio simulate --out DIR`:
 #        one .bag, its *_gt.tum and *_truth.yaml)
+#   POINT_FILTERS="4 3"  FAST-LIO2's point_filter_num values to run, one column each: 4 is its
+#                        mapping_velodyne.launch default, 3 its accurate setting (a VLP-16 cloud lists
+#                        its 16 rings column by column, so every 4th point keeps only rings 0, 4, 8
+#                        and 12, while every 3rd cycles through all 16)
 #   RATE=10      rosbag play rate for FAST-LIO2 (fed through roscore; it queues what it cannot
 #                process at once, so nothing is lost, and CPU time, not wall time, is compared)
 #   MMLIO=build/mmlio   the mmlio binary
@@ -16,7 +20,8 @@
 # FAST-LIO2 is built here without catkin, against Debian 12's ROS1 and PCL (installed on first
 # use: libpcl-dev is large), with stubs for what Debian does not package (bench/fastlio/stub:
 # the Livox driver's CustomMsg, FAST-LIO's Pose6D message, eigen_conversions). Its parameters are
-# its mapping_velodyne.launch defaults (0.5 m scan and map voxels, 4th point, 3 iterations).
+# its mapping_velodyne.launch defaults (0.5 m scan and map voxels, 3 iterations) with the point
+# filters of POINT_FILTERS.
 # Measured in the README (Speed).
 set -euo pipefail
 # Paths given relative to where it was started from, before it moves to the repository's root.
@@ -28,6 +33,7 @@ for d in "$@"; do dirs+=("$(realpath "$d")"); done
 cd "$(dirname "$0")/../.."
 ROOT=$(pwd)
 RATE="${RATE:-10}"
+POINT_FILTERS="${POINT_FILTERS:-4 3}"
 MMLIO="${MMLIO:-build/mmlio}"
 FASTLIO_COMMIT=7cc4175de6f8ba2edf34bab02a42195b141027e9
 IKDTREE_COMMIT=e2e3f4e9d3b95a9e66b1ba83dc98d4a05ed8a3c4
@@ -61,11 +67,13 @@ build() {
     -lpcl_common -lpcl_io -lpcl_filters -lpcl_kdtree -lpcl_search -lpython"${py#* }" -lboost_system -lpthread
 }
 
-# FAST-LIO2's parameters for a simulated rig: the spinning LiDAR's topic and extrinsic from the truth file.
+# FAST-LIO2's parameters for a simulated rig: the spinning LiDAR's topic and extrinsic from the truth
+# file ($1), every $2-th point.
 config() {
-  /usr/bin/python3 - "$1" <<'PY'
+  /usr/bin/python3 - "$1" "$2" <<'PY'
 import sys, yaml
 t = yaml.safe_load(open(sys.argv[1]))
+point_filter = int(sys.argv[2])
 v = t["velodyne"]
 T = v["T_imu_sensor"]
 imu = t.get("imu", {}).get("topic", "/livox/imu")
@@ -77,7 +85,7 @@ mapping: {{acc_cov: 0.1, gyr_cov: 0.1, b_acc_cov: 0.0001, b_gyr_cov: 0.0001, fov
 publish: {{path_en: false, scan_publish_en: false, dense_publish_en: false, scan_bodyframe_pub_en: false}}
 pcd_save: {{pcd_save_en: false, interval: -1}}
 feature_extract_enable: false
-point_filter_num: 4
+point_filter_num: {point_filter}
 max_iteration: 3
 filter_size_surf: 0.5
 filter_size_map: 0.5
@@ -138,21 +146,33 @@ ate_cm() {
     /usr/bin/python3 -c 'import json, sys; print("%.2f" % (100 * json.load(sys.stdin)["ate_rmse_m"]))'
 }
 
-[ $# -gt 0 ] || { sed -n '2,14p' "$0"; exit 2; }
+[ $# -gt 0 ] || { sed -n '2,/^set -euo/p' "$0" | sed '$d'; exit 2; }
 [ -x "$BIN" ] || build
 mode=$(basename "${MMLIO_CONFIG:-hvi}" .yaml | tr '[:lower:]' '[:upper:]')
-echo "| bag | FAST-LIO2 VI: CPU s, ATE cm | mmlio $mode + loops: CPU s, ATE cm (odometry) | CPU ratio |"
-echo "|---|---|---|---|"
+read -r -a filters <<< "$POINT_FILTERS"
+header="| bag |"; rule="|---|"
+for n in "${filters[@]}"; do header="$header FAST-LIO2 VI, 1 point in ${n}: CPU s, ATE cm |"; rule="$rule---|"; done
+header="$header mmlio $mode + loops: CPU s, ATE cm (odometry) |"; rule="$rule---|"
+for n in "${filters[@]}"; do header="$header CPU ratio to 1 in ${n} |"; rule="$rule---|"; done
+echo "$header"
+echo "$rule"
 for dir in "${dirs[@]}"; do
   bag=$(ls "$dir"/*.bag); gt=$(ls "$dir"/*_gt.tum); truth=$(ls "$dir"/*_truth.yaml)
+  row="| $(basename "$dir") |"
+  fl_cpus=()
+  for n in "${filters[@]}"; do
+    out="$WORK/runs/$(basename "$dir")-filter$n"
+    rm -rf "$out"; mkdir -p "$out"
+    config "$truth" "$n" >"$out/fastlio.yaml"
+    fl_cpu=$(run_fastlio "$bag" "$out/fastlio.yaml" "$out")
+    odom_to_tum "$out/odom.bag" "$out/fastlio.tum"
+    row="$row $fl_cpu, $(ate_cm "$gt" "$out/fastlio.tum") |"
+    fl_cpus+=("$fl_cpu")
+  done
   out="$WORK/runs/$(basename "$dir")"
-  rm -rf "$out"; mkdir -p "$out"
-  config "$truth" >"$out/fastlio.yaml"
-  fl_cpu=$(run_fastlio "$bag" "$out/fastlio.yaml" "$out")
-  odom_to_tum "$out/odom.bag" "$out/fastlio.tum"
-  fl_ate=$(ate_cm "$gt" "$out/fastlio.tum")
   mm_cpu=$(taskset -c 1 "$MMLIO" bench "$bag" "${mm_cfg[@]}" --calib "$truth" 2>&1 | sed -n 's/.*CPU \([0-9.]*\) s.*/\1/p' | head -1)
   "$MMLIO" run "$bag" "${mm_cfg[@]}" --calib "$truth" --no-progress --out "$out/mmlio" >/dev/null 2>&1
-  mm_ate=$(ate_cm "$gt" "$out/mmlio/trajectory_odometry.tum")
-  echo "| $(basename "$dir") | $fl_cpu, $fl_ate | $mm_cpu, $mm_ate | $(/usr/bin/python3 -c "print(f'{$mm_cpu / $fl_cpu:.2f}')") |"
+  row="$row $mm_cpu, $(ate_cm "$gt" "$out/mmlio/trajectory_odometry.tum") |"
+  for c in "${fl_cpus[@]}"; do row="$row $(/usr/bin/python3 -c "print(f'{$mm_cpu / $c:.2f}')") |"; done
+  echo "$row"
 done
