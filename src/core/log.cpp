@@ -1,5 +1,8 @@
 #include "mmlio/core/log.hpp"
 
+#include <cinttypes>
+#include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <mutex>
 
@@ -32,6 +35,16 @@ void configure(Level min_level, Sink sink) {
 }
 
 Level minLevel() { return state().min_level; }
+
+std::string stampText(std::int64_t stamp_ns) {
+  // Integer arithmetic: a double holds an epoch stamp's nanoseconds only to ~0.2 us, and rounding
+  // must not turn 0.9995 s into "0.1000".
+  const std::int64_t ms = (stamp_ns >= 0 ? stamp_ns + 500000 : stamp_ns - 500000) / 1000000;
+  char text[32];
+  std::snprintf(text, sizeof text, "%s%" PRId64 ".%03" PRId64, ms < 0 ? "-" : "", std::llabs(ms) / 1000,
+                std::llabs(ms) % 1000);
+  return text;
+}
 
 void write(Level level, const std::string& message) {
   std::lock_guard<std::mutex> lock(state().mutex);

@@ -550,7 +550,7 @@ Odometry::~Odometry() = default;
 void Odometry::addImu(const ImuSample& sample) {
   auto& d = *impl_;
   if (!d.imu.empty() && sample.stamp_ns <= d.imu.back().stamp_ns) {
-    log::emit(log::Level::kWarn, "IMU sample out of order or duplicated at ", toSec(sample.stamp_ns), " s: dropped");
+    log::emit(log::Level::kWarn, "IMU sample out of order or duplicated at ", log::stampText(sample.stamp_ns), " s: dropped");
     return;
   }
   d.imu.push_back(sample);
@@ -650,7 +650,7 @@ SweepResult Odometry::process(lidar::AlignedSweep sweep) {
     // restart with the data.
     d.free_space.clear();
     if (!d.in_imu_gap)
-      log::emit(log::Level::kWarn, "no IMU data over the sweep ending at ", toSec(sweep.end_ns),
+      log::emit(log::Level::kWarn, "no IMU data over the sweep ending at ", log::stampText(sweep.end_ns),
                 " s: LiDAR-only registration until it returns (the report counts degraded sweeps)");
   }
   const bool prev_velocity_guessed = d.in_imu_gap;  // the previous sweep had no IMU

@@ -45,7 +45,7 @@ void OnlinePipeline::addImu(const ImuSample& sample) {
       const int held_back = imu_gate_.config().jump_confirmations;
       const Stamp shift = gap_ns - held_back * std::max<Stamp>(imu_period_ns_, 1);
       time_jumps_.push_back({sample.stamp_ns, shift_ns_ + shift});
-      log::warn("time base jumped by ", toSec(gap_ns), " s at ", toSec(sample.stamp_ns),
+      log::warn("time base jumped by ", toSec(gap_ns), " s at ", log::stampText(sample.stamp_ns),
                 " s (IMU and every LiDAR together): continuing as if no time passed; outputs keep the input's stamps");
       shift_ns_ += shift;
       s.stamp_ns -= shift;

@@ -2,6 +2,7 @@
 // One logger with levels. The core reports degradations through it (never prints
 // directly); the CLI decides the sink and the level.
 
+#include <cstdint>
 #include <functional>
 #include <sstream>
 #include <string>
@@ -16,6 +17,10 @@ using Sink = std::function<void(Level, const std::string&)>;
 void configure(Level min_level, Sink sink = nullptr);
 Level minLevel();
 void write(Level level, const std::string& message);
+
+/// A bag stamp (ns) as seconds with millisecond digits, "1700000012.967": a log line's default
+/// float format would print 1.7e+09, the same for every stamp of a run.
+std::string stampText(std::int64_t stamp_ns);
 
 template <typename... Args>
 void emit(Level level, const Args&... args) {
