@@ -30,6 +30,13 @@ void calibrate(const CalibrateArgs& a) {
   opt.estimate_time_offset = !a.no_time_offset;
   const pipeline::BagCalibrationResult r = pipeline::calibrateBag(a.bag, cfg, opt);
   io::writeCalibration(a.out, r.calibration, r.extra);
+  printCalibration(r);
+  std::printf("written: %s\n", a.out.c_str());
+}
+
+}  // namespace
+
+void printCalibration(const pipeline::BagCalibrationResult& r) {
   const Eigen::Isometry3d& T = r.calibration.at(r.spinning).T_imu_sensor;
   const Eigen::Vector3d ypr = T.rotation().eulerAngles(2, 1, 0) * 180.0 / M_PI;
   std::printf("%s -> IMU: translation (%.4f, %.4f, %.4f) m, yaw/pitch/roll (%.3f, %.3f, %.3f) deg\n", r.spinning.c_str(),
@@ -40,10 +47,7 @@ void calibrate(const CalibrateArgs& a) {
                 1e3 * r.temporal.sigma_s);
   else
     std::printf("  clock offset not estimated: %s\n", r.temporal.message.empty() ? "disabled" : r.temporal.message.c_str());
-  std::printf("written: %s\n", a.out.c_str());
 }
-
-}  // namespace
 
 void registerCalibrateCommand(CLI::App& app) {
   auto args = std::make_shared<CalibrateArgs>();

@@ -1,5 +1,6 @@
 // mmlio run BAG: the main job, bag in -> trajectory, map and report out.
 #include <atomic>
+#include <cstdio>
 #include <cstdlib>
 #include <csignal>
 #include <filesystem>
@@ -41,7 +42,8 @@ void applyCalibrationSource(io::RigConfig& cfg, const std::string& calib_overrid
     io::applyCalibration(cfg, r.calibration);
     std::filesystem::create_directories(out_dir);
     io::writeCalibration(out_dir + "/calib.yaml", r.calibration, r.extra);
-    log::emit(log::Level::kInfo, "calibration: auto -> ", out_dir, "/calib.yaml");
+    printCalibration(r);
+    std::printf("written: %s/calib.yaml\n", out_dir.c_str());
     return;
   }
   const io::Calibration calibration = io::readCalibration(source);
@@ -91,6 +93,13 @@ void run(const RunArgs& a) {
             << "map:        " << a.out << "/map.pcd (" << r.map_points << " points)\n"
             << "report:     " << a.out << "/report.json, " << a.out << "/report.md\n\n"
             << r.timing.table();
+  if (r.report.evaluation) {
+    const eval::EvalResult& e = *r.report.evaluation;
+    std::printf("\nagainst %s: ATE %.2f cm RMSE (max %.2f cm, attitude %.3f deg) over %zu poses and %.1f m of path "
+                "(report.json: evaluation)\n",
+                a.gt.c_str(), 100.0 * e.ate_rmse_m, 100.0 * e.ate_max_m, e.ate_rot_rmse_deg, e.num_associated,
+                e.path_length_m);
+  }
   if (!r.untrusted.empty()) {
     std::cerr << "mmlio: outputs written but not trustworthy: " << r.untrusted << " (see " << a.out << "/report.json)\n";
     std::exit(kExitUntrusted);

@@ -3,6 +3,10 @@
 // Handlers throw mmlio::Error for user-facing problems; main() prints them as one line.
 #include <CLI/CLI.hpp>
 
+namespace mmlio::pipeline {
+struct BagCalibrationResult;
+}
+
 namespace mmlio::apps {
 void registerInfoCommand(CLI::App& app);
 void registerSimulateCommand(CLI::App& app);
@@ -10,4 +14,8 @@ void registerEvaluateCommand(CLI::App& app);
 void registerRunCommand(CLI::App& app);
 void registerBenchCommand(CLI::App& app);
 void registerCalibrateCommand(CLI::App& app);
+
+/// What a calibration estimated, on stdout: the spinning LiDAR's extrinsic, the fit, the clock offset
+/// (`mmlio calibrate` and `mmlio run --calib auto`).
+void printCalibration(const pipeline::BagCalibrationResult& r);
 }  // namespace mmlio::apps

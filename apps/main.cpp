@@ -28,7 +28,11 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version are "errors" with code 0; every usage error is one line and exit 1, as
+    // the README documents (CLI11's own codes, 105 and up, are not).
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+    std::cerr << "mmlio: " << e.what() << " (see mmlio --help)\n";
+    return 1;
   } catch (const mmlio::Error& e) {
     std::cerr << "mmlio: " << e.what() << '\n';
     return 1;

@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# CTest: every usage or input error of the mmlio command is one line on stderr and exit code 1
+# (the README's exit codes); --help and --version exit 0. Usage: usage_errors.sh MMLIO_BINARY
+set -uo pipefail
+mmlio="$1"
+failed=0
+expect() {  # expect CODE ARGS...: exit code CODE, and for a non-zero code one "mmlio: ..." line on stderr
+  local want=$1
+  shift
+  local err code
+  err=$("$mmlio" "$@" 2>&1 >/dev/null)
+  code=$?
+  if [ "$code" -ne "$want" ]; then
+    echo "FAIL: mmlio $* exited $code, expected $want: $err"
+    failed=1
+  elif [ "$want" -ne 0 ] && { [ "$(printf '%s\n' "$err" | wc -l)" -ne 1 ] || [[ "$err" != "mmlio: "* ]]; }; then
+    echo "FAIL: mmlio $*: expected one 'mmlio: ' line on stderr, got: $err"
+    failed=1
+  fi
+}
+expect 0 --help
+expect 0 --version
+expect 0 run --help
+expect 1                                   # no subcommand
+expect 1 run                               # no bag
+expect 1 run /nonexistent/mmlio.bag        # a path that does not exist
+expect 1 run /nonexistent/mmlio.bag --no-such-flag
+expect 1 bench /dev/null --replay 0        # not a positive number
+expect 1 run /dev/null --duration soon     # not a number
+expect 1 evaluate --gt /nonexistent.tum --est /nonexistent.tum
+expect 1 info /dev/null                    # not a bag
+exit $failed
