@@ -18,10 +18,18 @@
 namespace mmlio::pipeline {
 namespace {
 
+constexpr Stamp kImuAfterStopNs = 500000000;  // 0.5 s: past the end of the sweep a --duration cut falls in
+
 // Found before hours of work, not after: the output folder exists (or is created) and takes a file.
-void checkWritable(const std::string& dir) {
+// Returns the outermost folder created here (empty if the folder existed).
+std::filesystem::path checkWritable(const std::string& dir) {
   namespace fs = std::filesystem;
   std::error_code error;
+  fs::path created;
+  for (fs::path p = fs::absolute(dir, error); !p.empty() && !fs::exists(p, error); p = p.parent_path()) {
+    created = p;
+    if (p == p.parent_path()) break;
+  }
   fs::create_directories(dir, error);
   if (!fs::is_directory(dir, error))
     throw Error("cannot create output directory '" + dir + "'" + (error ? ": " + error.message() : std::string()));
@@ -31,13 +39,37 @@ void checkWritable(const std::string& dir) {
     if (!(out << "ok")) throw Error("cannot write to output directory '" + dir + "'");
   }
   fs::remove(probe, error);
+  return created;
 }
+
+/// The output folders this run created are removed again if it ends in an error before writing
+/// into them (a wrong topic, a bag that never initialises): no empty folder is left behind.
+class CreatedFolder {
+ public:
+  CreatedFolder(const std::filesystem::path& leaf, std::filesystem::path outermost) : outermost_(std::move(outermost)) {
+    std::error_code error;
+    if (!outermost_.empty()) leaf_ = std::filesystem::absolute(leaf, error);
+  }
+  CreatedFolder(const CreatedFolder&) = delete;
+  CreatedFolder& operator=(const CreatedFolder&) = delete;
+  ~CreatedFolder() {
+    if (outermost_.empty()) return;
+    std::error_code error;
+    for (std::filesystem::path p = leaf_; std::filesystem::is_empty(p, error); p = p.parent_path()) {
+      if (!std::filesystem::remove(p, error) || p == outermost_) break;
+    }
+  }
+  void keep() { outermost_.clear(); }
+
+ private:
+  std::filesystem::path leaf_, outermost_;
+};
 
 }  // namespace
 
 RunResult runBag(const RunOptions& options) {
   const io::RigConfig& cfg = options.config;
-  if (!options.out_dir.empty()) checkWritable(options.out_dir);
+  CreatedFolder out_folder(options.out_dir, options.out_dir.empty() ? std::filesystem::path() : checkWritable(options.out_dir));
   const std::string mode = options.mode.empty() ? cfg.mode : options.mode;
   if (!io::isValidMode(mode)) throw Error("unknown mode '" + mode + "' (expected hvi, vi or hi)");
 
@@ -49,8 +81,9 @@ RunResult runBag(const RunOptions& options) {
   Stopwatch wall;
 
   RunResult result;
-  const Stamp stop_ns = options.max_duration_s > 0 ? source.beginNs() + fromSec(options.max_duration_s)
-                                                   : std::numeric_limits<Stamp>::max();
+  const bool cut = options.max_duration_s > 0;
+  const Stamp stop_ns = cut ? source.beginNs() + fromSec(options.max_duration_s) : std::numeric_limits<Stamp>::max();
+  const Stamp imu_stop_ns = cut ? stop_ns + kImuAfterStopNs : stop_ns;
   try {
     io::SensorEvent event;
     std::size_t events = 0;
@@ -64,10 +97,13 @@ RunResult runBag(const RunOptions& options) {
       while (!(options.stop && options.stop->load()) && src.next(&event)) {
         if (event.kind == io::SensorEvent::Kind::kImu) {
           event.imu.stamp_ns += shift;
-          if (event.imu.stamp_ns > stop_ns) break;
+          // Scans end at the requested duration; the IMU goes on a little so that the sweep the
+          // last scans fall in is predicted and de-skewed like any other, not reported degraded.
+          if (event.imu.stamp_ns > imu_stop_ns) break;
           system.addImu(event.imu);
         } else {
           event.scan.start_ns += shift;
+          if (event.scan.start_ns > stop_ns) continue;
           system.addScan(std::move(event.scan));
         }
         if (++events % 50 == 0) {
@@ -125,10 +161,14 @@ RunResult runBag(const RunOptions& options) {
   const Trajectory& poses = system.odometryTrajectory();
   if (!poses.empty()) {
     // To the bag's end (its last message, whatever was readable), not just to the last IMU sample read.
-    const Stamp end_ns =
-        options.replays > 1 ? odometry.lastImuNs() : std::max(odometry.lastImuNs(), std::min(source.endNs(), stop_ns));
+    // A run cut by --duration is judged on the span asked for.
+    const Stamp end_ns = options.replays > 1              ? odometry.lastImuNs()
+                         : cut                          ? std::min(source.endNs(), stop_ns)
+                                                        : std::max(odometry.lastImuNs(), source.endNs());
     const double span_s = toSec(end_ns - poses.front().stamp_ns);
-    report.sweeps.coverage = span_s > 0 ? toSec(poses.back().stamp_ns - poses.front().stamp_ns) / span_s : 1.0;
+    // The last sweep may end just past a --duration cut: never more than all of it covered.
+    report.sweeps.coverage =
+        span_s > 0 ? std::min(1.0, toSec(poses.back().stamp_ns - poses.front().stamp_ns) / span_s) : 1.0;
     report.sweeps.degraded_fraction =
         static_cast<double>(report.sweeps.degraded) / static_cast<double>(std::max<std::size_t>(poses.size(), 1));
     const double limit = options.max_degraded_fraction;
@@ -149,6 +189,7 @@ RunResult runBag(const RunOptions& options) {
   if (result.interrupted) result.untrusted = "interrupted";
   report.untrusted = result.untrusted;
   if (!options.out_dir.empty()) report = system.writeOutputs(options.out_dir, std::move(report), options.gt_path);
+  out_folder.keep();
   result.trajectory = system.trajectory();
   result.map_points = report.outputs.map_points;
   result.timing = report.timing;

@@ -234,6 +234,47 @@ TEST(RunBag, AStopRequestEndsTheRunWithWhatWasComputedWrittenAndFlagged) {
   std::filesystem::remove(options.bag_path);
 }
 
+TEST(RunBag, ADurationCutEndsWithAnOrdinaryTrackedSweepAndFullCoverage) {
+  // `--duration`: the scans stop at the cut; the IMU must not stop before the last sweep ends
+  // (that sweep was reported degraded, and coverage above 1).
+  const sim::Simulator sim = office(8.0);
+  RunOptions options;
+  options.config = testing::simRigConfig(sim);
+  options.config.mapping.loop_enabled = false;
+  options.progress = false;
+  options.max_duration_s = 5.0;
+  options.bag_path = officeBag(sim, "mmlio_duration_cut.bag", [](const ImuSample&) { return true; });
+  const RunResult r = runBag(options);
+  ASSERT_GT(r.trajectory.size(), 10u);
+  EXPECT_EQ(r.report.sweeps.degraded, 0u);
+  EXPECT_LE(r.report.sweeps.coverage, 1.0);
+  EXPECT_GT(r.report.sweeps.coverage, 0.95);
+  EXPECT_TRUE(r.untrusted.empty()) << r.untrusted;
+  const double last_s = toSec(r.trajectory.back().stamp_ns - sim.startNs());
+  EXPECT_GT(last_s, 4.8);
+  EXPECT_LT(last_s, 5.25);
+  std::filesystem::remove(options.bag_path);
+}
+
+TEST(RunBag, AnErrorBeforeAnyOutputLeavesNoFolderItCreatedButKeepsTheUsers) {
+  const sim::Simulator sim = office(2.0);
+  RunOptions options;
+  options.config = testing::simRigConfig(sim);
+  options.config.imu.topic = "/no/such/imu";
+  options.progress = false;
+  options.bag_path = officeBag(sim, "mmlio_wrong_topic.bag", [](const ImuSample&) { return true; });
+  const std::filesystem::path out = std::filesystem::temp_directory_path() / "mmlio_wrong_topic_out" / "run";
+  std::filesystem::remove_all(out.parent_path());
+  options.out_dir = out.string();
+  EXPECT_THROW(runBag(options), Error);
+  EXPECT_FALSE(std::filesystem::exists(out.parent_path()));  // both levels it created
+  std::filesystem::create_directories(out);  // the user's own folder stays, empty or not
+  EXPECT_THROW(runBag(options), Error);
+  EXPECT_TRUE(std::filesystem::is_directory(out));
+  std::filesystem::remove_all(out.parent_path());
+  std::filesystem::remove(options.bag_path);
+}
+
 TEST(RunBag, TellsItsTimingObserverEverySweepOnceInTimeOrderAcrossReplays) {
   // What `mmlio bench --curve` records: one call per sweep the report times, later stamps for the
   // second pass of a replayed bag, and the same stage times the report sums.
