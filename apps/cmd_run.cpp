@@ -42,6 +42,7 @@ void applyCalibrationSource(io::RigConfig& cfg, const std::string& calib_overrid
     io::applyCalibration(cfg, r.calibration);
     std::filesystem::create_directories(out_dir);
     io::writeCalibration(out_dir + "/calib.yaml", r.calibration, r.extra);
+    cfg.calibration = "auto (" + out_dir + "/calib.yaml)";  // what the report records
     printCalibration(r);
     std::printf("written: %s/calib.yaml\n", out_dir.c_str());
     return;
@@ -52,6 +53,7 @@ void applyCalibrationSource(io::RigConfig& cfg, const std::string& calib_overrid
     log::emit(log::Level::kWarn, "calibration ", source, " has no entry for LiDAR '", name,
               "': keeping its extrinsic from the config");
   }
+  cfg.calibration = source;
   log::emit(log::Level::kInfo, "extrinsics and clock offsets from ", source);
 }
 

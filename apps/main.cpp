@@ -5,11 +5,12 @@
 #include "commands.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
+#include "mmlio/version.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"mmlio: multi-LiDAR-inertial odometry and mapping for ROS 1 and ROS 2 bags"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "mmlio 0.1.0");
+  app.set_version_flag("--version", std::string("mmlio ") + mmlio::kVersion + " (" + mmlio::kCommit + ")");
   bool verbose = false, quiet = false;
   app.add_flag("-v,--verbose", verbose, "Print debug messages");
   app.add_flag("-q,--quiet", quiet, "Print warnings and errors only");

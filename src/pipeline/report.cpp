@@ -63,6 +63,12 @@ void writeReports(const std::string& dir, RunReport& report, const Trajectory& t
   } catch (const std::exception& e) {
     log::emit(log::Level::kWarn, "report figures skipped: ", e.what());
   }
+  if (!report.run.config_yaml.empty())
+    io::writeFileAtomically(dir + "config_used.yaml", [&](std::ostream& os) {
+      os << "# The effective config of this run (mmlio " << report.run.mmlio_version << ", " << report.run.commit
+         << "; extrinsics from " << report.run.calibration << "): mmlio run BAG --config config_used.yaml\n"
+         << report.run.config_yaml;
+    });
   io::writeFileAtomically(dir + "report.json", [&](std::ostream& os) { os << toJson(report).dump(2) << '\n'; });
   io::writeFileAtomically(dir + "report.md", [&](std::ostream& os) { os << toMarkdown(report); });
 }

@@ -92,6 +92,12 @@ Json toJson(const RunReport& r) {
   rep["status"] = r.status;
   rep["trustworthy"] = r.untrusted.empty();
   if (!r.untrusted.empty()) rep["untrusted_because"] = r.untrusted;
+  Json& run = rep["run"];
+  run["schema_version"] = RunReport::Provenance::kSchemaVersion;
+  run["mmlio_version"] = r.run.mmlio_version;
+  run["commit"] = r.run.commit;
+  run["calibration"] = r.run.calibration;
+  run["config_yaml"] = r.run.config_yaml;
 
   Json& in = rep["input"];
   in["source"] = r.input.source;
@@ -197,7 +203,12 @@ Json toJson(const RunReport& r) {
 }
 
 std::string toMarkdown(const RunReport& report) {
-  const Json rep = toJson(report);
+  Json rep = toJson(report);
+  // The config is a file of its own next to the report, not a table cell.
+  if (rep["run"].contains("config_yaml")) {
+    rep["run"].erase("config_yaml");
+    rep["run"]["config"] = "config_used.yaml";
+  }
   std::string md = "# mmlio run report\n\n";
   for (const auto& [k, v] : rep.items())
     if (!v.is_object()) md += "- **" + k + "**: " + plainText(v) + "\n";

@@ -9,6 +9,7 @@
 #include "mmlio/io/trajectory_writer.hpp"
 #include "mmlio/pipeline/odometry_setup.hpp"
 #include "mmlio/pipeline/report.hpp"
+#include "mmlio/version.hpp"
 
 namespace mmlio::pipeline {
 
@@ -95,6 +96,13 @@ std::vector<Point> System::map() const {
 
 RunReport System::report() const {
   RunReport r;
+  r.run.mmlio_version = kVersion;
+  r.run.commit = kCommit;
+  r.run.calibration = cfg_.calibration;
+  io::RigConfig effective = cfg_;  // as run: the mode chosen, the extrinsics already applied
+  effective.mode = mode_;
+  effective.calibration = "config";
+  r.run.config_yaml = io::toYaml(effective);
   r.input.mode = mode_;
   r.input.config = cfg_.source_path;
   r.input.imu_dropped = online_.imuGate().counts();

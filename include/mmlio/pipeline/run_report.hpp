@@ -67,8 +67,17 @@ struct RunReport {
     std::map<std::string, std::string> per_lidar_maps;
   };
 
+  // What reproduces the run: which mmlio, with which settings (report.json: run).
+  struct Provenance {
+    static constexpr int kSchemaVersion = 1;  // of report.json; raised when a field changes meaning
+    std::string mmlio_version, commit;
+    std::string calibration;  // where the extrinsics came from: config, a calibration file, auto
+    std::string config_yaml;  // the effective config, extrinsics applied (also written as config_used.yaml)
+  };
+
   std::string status = "complete";  // complete | degraded: ... | interrupted | incomplete: <error>
   std::string untrusted;            // empty, or why the outputs should not be trusted (exit code 3)
+  Provenance run;
   Input input;
   imu::ImuInitResult imu_init;
   Sweeps sweeps;
