@@ -14,6 +14,7 @@ void registerEvaluateCommand(CLI::App& app);
 void registerRunCommand(CLI::App& app);
 void registerBenchCommand(CLI::App& app);
 void registerCalibrateCommand(CLI::App& app);
+void registerConfigCommand(CLI::App& app);
 
 /// What a calibration estimated, on stdout: the spinning LiDAR's extrinsic, the fit, the clock offset
 /// (`mmlio calibrate` and `mmlio run --calib auto`).

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   mmlio::apps::registerEvaluateCommand(app);
   mmlio::apps::registerBenchCommand(app);
   mmlio::apps::registerCalibrateCommand(app);
+  mmlio::apps::registerConfigCommand(app);
 
   try {
     app.parse(argc, argv);

@@ -29,4 +29,18 @@ expect 1 bench /dev/null --replay 0        # not a positive number
 expect 1 run /dev/null --duration soon     # not a number
 expect 1 evaluate --gt /nonexistent.tum --est /nonexistent.tum
 expect 1 info /dev/null                    # not a bag
+expect 1 config                                   # neither --dump-defaults nor a file
+expect 1 config --dump-defaults "$0"                # both
+
+# config --dump-defaults is a rig file: checked, it prints the same keys and values.
+tmp=$(mktemp -d)
+"$mmlio" config --dump-defaults > "$tmp/defaults.yaml" || { echo "FAIL: config --dump-defaults"; failed=1; }
+"$mmlio" config "$tmp/defaults.yaml" > "$tmp/checked.yaml" || { echo "FAIL: config FILE"; failed=1; }
+if ! diff <(grep -v '^#' "$tmp/defaults.yaml") <(grep -v '^#' "$tmp/checked.yaml") >/dev/null; then
+  echo "FAIL: mmlio config of the dumped defaults differs from them"
+  failed=1
+fi
+printf 'odometry:\n  window_size: four\n' > "$tmp/bad.yaml"
+expect 1 config "$tmp/bad.yaml"
+rm -rf "$tmp"
 exit $failed
