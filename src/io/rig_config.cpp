@@ -21,7 +21,8 @@ void bind(YamlBinder& b, LidarConfig& c) {
           "livox (livox_ros_driver/CustomMsg, solid state) (required)");
   b.field("topic", c.topic, "ROS topic of this LiDAR's point clouds (required)");
   b.field("T_imu_sensor", c.T_imu_sensor,
-          "extrinsic: 4x4 row-major, maps points from this LiDAR's frame into the IMU frame, m");
+          "extrinsic: maps points from this LiDAR's frame into the IMU frame: 4x4 row-major, m, or\n"
+          "{xyz: [x, y, z], rpy_deg: [roll, pitch, yaw]} (ROS/URDF order) or {xyz: [...], quaternion: [qx, qy, qz, qw]}");
   b.field("time_offset_s", c.time_offset_s, "clock offset, s: t_imu = t_stamp + time_offset_s");
   b.field("min_range_m", c.min_range_m, "drop returns closer than this (rig, vehicle), m");
   b.field("max_range_m", c.max_range_m, "drop returns farther than this, m");

@@ -1,9 +1,11 @@
 #include "mmlio/io/yaml_binder.hpp"
 
+#include <Eigen/SVD>
 #include <cmath>
 #include <sstream>
 
 #include "mmlio/core/error.hpp"
+#include "mmlio/core/log.hpp"
 #include "mmlio/io/trajectory_writer.hpp"
 
 namespace mmlio::io {
@@ -71,13 +73,79 @@ void decodeYaml(const YAML::Node& node, const std::string& where, std::vector<do
   value = std::move(out);
 }
 
-void decodeYaml(const YAML::Node& node, const std::string& where, Eigen::Isometry3d& value) {
+namespace {
+
+// A rotation typed by hand with 4-6 digits is off by up to ~1e-4: taken as the nearest rotation,
+// with a warning. Farther off than this it is a mistake (a wrong entry, a transposed row), not rounding.
+constexpr double kNearlyOrthonormal = 1e-2;
+
+double orthonormalityError(const Eigen::Matrix3d& R) {
+  return (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+}
+
+std::vector<double> numbersOf(const YAML::Node& node, const std::string& where, std::size_t count, const char* what) {
   std::vector<double> numbers;
   decodeYaml(node, where, numbers);
-  if (numbers.size() != 16)
-    throw Error(where + ": expected 16 numbers (4x4 row-major), got " + std::to_string(numbers.size()));
+  if (numbers.size() != count)
+    throw Error(where + ": expected " + std::to_string(count) + " numbers (" + what + "), got " +
+                std::to_string(numbers.size()));
+  return numbers;
+}
+
+// {xyz: [x, y, z], rpy_deg: [roll, pitch, yaw]} (ROS / URDF: R = Rz(yaw) Ry(pitch) Rx(roll)) or
+// {xyz: [...], quaternion: [qx, qy, qz, qw]} (ROS order).
+Eigen::Isometry3d decodeXyzRotation(const YAML::Node& node, const std::string& where) {
+  for (const auto& entry : node) {
+    const std::string key = entry.first.Scalar();
+    if (key != "xyz" && key != "rpy_deg" && key != "quaternion")
+      throw Error(where + ": unknown key '" + key + "' (expected xyz with rpy_deg or quaternion, or 16 numbers)");
+  }
+  if (!node["xyz"]) throw Error(where + ": missing xyz (translation, m)");
+  if (static_cast<bool>(node["rpy_deg"]) == static_cast<bool>(node["quaternion"]))
+    throw Error(where + ": give exactly one of rpy_deg [roll, pitch, yaw] and quaternion [qx, qy, qz, qw]");
+  const std::vector<double> xyz = numbersOf(node["xyz"], where + ".xyz", 3, "x, y, z in m");
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
+  if (node["rpy_deg"]) {
+    const std::vector<double> rpy = numbersOf(node["rpy_deg"], where + ".rpy_deg", 3, "roll, pitch, yaw in degrees");
+    const double k = M_PI / 180.0;
+    T.linear() = (Eigen::AngleAxisd(rpy[2] * k, Eigen::Vector3d::UnitZ()) *
+                  Eigen::AngleAxisd(rpy[1] * k, Eigen::Vector3d::UnitY()) *
+                  Eigen::AngleAxisd(rpy[0] * k, Eigen::Vector3d::UnitX()))
+                     .toRotationMatrix();
+  } else {
+    const std::vector<double> q = numbersOf(node["quaternion"], where + ".quaternion", 4, "qx, qy, qz, qw");
+    Eigen::Quaterniond quaternion(q[3], q[0], q[1], q[2]);
+    const double norm = quaternion.norm();
+    if (!std::isfinite(norm) || std::abs(norm - 1.0) > kNearlyOrthonormal)
+      throw Error(where + ".quaternion: not a unit quaternion (norm " + formatDouble(norm) + ")");
+    if (std::abs(norm - 1.0) > 1e-6)
+      log::warn(where, ".quaternion: norm ", norm, ", normalised (give 7 or more significant digits to silence this)");
+    T.linear() = quaternion.normalized().toRotationMatrix();
+  }
+  if (!T.matrix().allFinite()) throw Error(where + ": transform has non-finite entries");
+  return T;
+}
+
+}  // namespace
+
+void decodeYaml(const YAML::Node& node, const std::string& where, Eigen::Isometry3d& value) {
+  if (node.IsMap()) {
+    value = decodeXyzRotation(node, where);
+    return;
+  }
+  const std::vector<double> numbers = numbersOf(node, where, 16, "4x4 row-major, or xyz with rpy_deg or quaternion");
   Eigen::Matrix4d m;
   for (int k = 0; k < 16; ++k) m(k / 4, k % 4) = numbers[k];
+  const Eigen::Matrix3d R = m.topLeftCorner<3, 3>();
+  const double error = m.allFinite() ? orthonormalityError(R) : 0.0;
+  if (error > 1e-6 && error <= kNearlyOrthonormal && R.determinant() > 0) {
+    // The nearest rotation in the Frobenius norm: U V^T of R's singular value decomposition.
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    m.topLeftCorner<3, 3>() = svd.matrixU() * svd.matrixV().transpose();
+    log::warn(where, ": rotation re-orthonormalised (max |R^T R - I| was ", error,
+              "; give 7 or more significant digits to silence this)");
+  }
   validateRigidTransform(m, where);
   value.matrix() = m;
 }
@@ -91,7 +159,7 @@ void validateRigidTransform(const Eigen::Matrix4d& m, const std::string& where) 
   if (orthonormality_error > 1e-6) {
     std::ostringstream os;
     os << where << ": rotation is not orthonormal (max |R^T R - I| = " << orthonormality_error
-       << " > 1e-6); write it with at least 7 significant digits";
+       << "; up to 0.01 is taken as rounding and re-orthonormalised): check the entries";
     throw Error(os.str());
   }
   if (R.determinant() < 0) throw Error(where + ": rotation has determinant -1 (a reflection, not a rotation)");

@@ -301,6 +301,41 @@ TEST(Validation, ExtrinsicMustBeSixteenNumbersOfARigidTransform) {
   EXPECT_EQ(cfg.lidars[0].T_imu_sensor.translation(), Eigen::Vector3d(1, 2, 3));
 }
 
+TEST(Validation, ExtrinsicAlsoAsXyzWithRollPitchYawOrAQuaternion) {
+  const std::string head = "lidars:\n  - name: a\n    type: velodyne\n    topic: /a\n    T_imu_sensor: ";
+  const std::string tail = "\nreference_lidar: a\n";
+  // ROS / URDF order: roll about x, then pitch about y, then yaw about z (fixed axes).
+  const Eigen::Matrix3d want = (Eigen::AngleAxisd(30 * M_PI / 180, Eigen::Vector3d::UnitZ()) *
+                                Eigen::AngleAxisd(-10 * M_PI / 180, Eigen::Vector3d::UnitY()) *
+                                Eigen::AngleAxisd(5 * M_PI / 180, Eigen::Vector3d::UnitX()))
+                                   .toRotationMatrix();
+  const RigConfig rpy = parseRigConfig(head + "{xyz: [0.1, -0.2, 0.3], rpy_deg: [5, -10, 30]}" + tail, "r.yaml");
+  EXPECT_TRUE(rpy.lidars[0].T_imu_sensor.linear().isApprox(want, 1e-12));
+  EXPECT_TRUE(rpy.lidars[0].T_imu_sensor.translation().isApprox(Eigen::Vector3d(0.1, -0.2, 0.3), 1e-15));
+  const Eigen::Quaterniond q(want);
+  const RigConfig quaternion = parseRigConfig(head + "{xyz: [0.1, -0.2, 0.3], quaternion: [" + std::to_string(q.x()) +
+                                                  ", " + std::to_string(q.y()) + ", " + std::to_string(q.z()) + ", " +
+                                                  std::to_string(q.w()) + "]}" + tail,
+                                              "r.yaml");
+  EXPECT_TRUE(quaternion.lidars[0].T_imu_sensor.linear().isApprox(want, 1e-5));  // 6 digits, normalised
+  EXPECT_ERROR_CONTAINS(parseRigConfig(head + "{xyz: [0, 0, 0]}" + tail, "r.yaml"), "exactly one of rpy_deg");
+  EXPECT_ERROR_CONTAINS(
+      parseRigConfig(head + "{xyz: [0, 0, 0], rpy_deg: [0, 0, 0], quaternion: [0, 0, 0, 1]}" + tail, "r.yaml"),
+      "exactly one of rpy_deg");
+  EXPECT_ERROR_CONTAINS(parseRigConfig(head + "{rpy_deg: [0, 0, 0]}" + tail, "r.yaml"), "missing xyz");
+  EXPECT_ERROR_CONTAINS(parseRigConfig(head + "{xyz: [0, 0], rpy_deg: [0, 0, 0]}" + tail, "r.yaml"),
+                        "lidars[0].T_imu_sensor.xyz: expected 3 numbers");
+  EXPECT_ERROR_CONTAINS(parseRigConfig(head + "{xyz: [0, 0, 0], quaternion: [0, 0, 0, 2]}" + tail, "r.yaml"),
+                        "not a unit quaternion");
+  EXPECT_ERROR_CONTAINS(parseRigConfig(head + "{xyz: [0, 0, 0], ypr_deg: [0, 0, 0]}" + tail, "r.yaml"),
+                        "unknown key 'ypr_deg'");
+  // A matrix typed with 4 digits (a 30 deg yaw) is taken as the nearest rotation.
+  const RigConfig typed = parseRigConfig(head + "[0.8660, -0.5000, 0, 0, 0.5000, 0.8660, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]" +
+                                             tail, "r.yaml");
+  EXPECT_TRUE(typed.lidars[0].T_imu_sensor.linear().isApprox(
+      Eigen::AngleAxisd(M_PI / 6, Eigen::Vector3d::UnitZ()).toRotationMatrix(), 1e-4));
+}
+
 // ---- modes -------------------------------------------------------------------------------
 
 TEST(Modes, HviUsesBothViTheVelodyneHiTheLivox) {
@@ -380,12 +415,18 @@ TEST(Calibration, HandWrittenFileWithMetadataReads) {
   EXPECT_EQ(c.at("velodyne").time_offset_s, 0.0);
 }
 
-TEST(Calibration, NonOrthonormalRotationIsRejectedNamingFileAndSensor) {
+TEST(Calibration, RoundedRotationIsOrthonormalisedAndAWrongOneRejectedNamingFileAndSensor) {
   TempDir dir;
   const std::string path = dir.write("c.yaml",
                                      "livox:\n"
                                      "  T_imu_sensor: [1, 0.001, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]\n"
                                      "  time_offset_s: 0\n");
+  // Off by 1e-3 (digits typed by hand): the nearest rotation, with a warning; off by 0.1: refused.
+  const Calibration rounded = readCalibration(path);
+  const Eigen::Matrix3d R = rounded.at("livox").T_imu_sensor.linear();
+  EXPECT_LT((R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_NEAR(R(0, 1), 0.0005, 1e-6);  // halfway: the nearest rotation splits the skew
+  dir.write("c.yaml", "livox:\n  T_imu_sensor: [1, 0.1, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]\n");
   EXPECT_ERROR_CONTAINS(readCalibration(path), path + ":2: sensor 'livox': T_imu_sensor: rotation is not orthonormal");
   // 1e-7 perturbations (printing with 7 digits) pass.
   dir.write("c.yaml", "livox:\n  T_imu_sensor: [1, 1e-7, 0, 0, -1e-7, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]\n");

@@ -34,6 +34,10 @@ void decodeYaml(const YAML::Node& node, const std::string& where, int& value);
 void decodeYaml(const YAML::Node& node, const std::string& where, double& value);
 void decodeYaml(const YAML::Node& node, const std::string& where, std::string& value);
 void decodeYaml(const YAML::Node& node, const std::string& where, std::vector<double>& value);
+/// A rigid transform: 16 numbers (4x4 row-major; a rotation off by up to 0.01 from orthonormal, as
+/// hand-typed digits leave it, is replaced by the nearest rotation with a warning), or a map
+/// {xyz: [x, y, z], rpy_deg: [roll, pitch, yaw]} (R = Rz(yaw) Ry(pitch) Rx(roll), as ROS and URDF)
+/// or {xyz: [...], quaternion: [qx, qy, qz, qw]}.
 void decodeYaml(const YAML::Node& node, const std::string& where, Eigen::Isometry3d& value);
 
 /// YAML text of a value; `indent` is the column continuation lines start at (used by matrices).
