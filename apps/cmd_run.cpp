@@ -73,6 +73,12 @@ void run(const RunArgs& a) {
   }
   if (a.no_loop) cfg.mapping.loop_enabled = false;
   applyCalibrationSource(cfg, a.calib, a.bag, a.out);
+  const std::string mode = a.mode.empty() ? cfg.mode : a.mode;
+  if (io::isValidMode(mode))
+    for (const std::string& name : io::placeholderExtrinsics(cfg, mode))
+      log::warn("LiDAR '", name, "' is on the presets' placeholder mount (0.2 m above the IMU, axes aligned): ",
+                "a real mount's offset from it becomes an error of every sweep; ",
+                "calibrate it (mmlio calibrate, or --calib auto) or give the rig drawing's extrinsic");
 
   pipeline::RunOptions options;
   options.bag_path = a.bag;

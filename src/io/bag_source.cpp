@@ -179,9 +179,15 @@ void BagSource::Impl::checkTopics(const BagSourceOptions& o,
     s.topic = l.topic;
     if (isCloudType(t))
       s.type = Stream::Type::kCloud;
-    else if (isLivoxType(t))
+    else if (isLivoxType(t)) {
+      // A Livox driver's own message comes from a solid-state LiDAR: read as a spinning one, its
+      // points would be given rings, scan lines and a sweep they do not have, without a word.
+      if (l.kind != LidarKind::kSolidState)
+        throw Error("topic " + l.topic + " (LiDAR '" + l.name + "') in " + path + " is " + t +
+                    ", a solid-state Livox LiDAR's message, but the LiDAR is declared as a spinning one: give it "
+                    "type: livox (or check that the topics are not swapped)");
       s.type = Stream::Type::kLivox;
-    else
+    } else
       throw Error("topic " + l.topic + " (LiDAR '" + l.name + "') in " + path + " is " + t + ", expected " +
                   kPointCloud2 + " or " + kLivoxCustomMsgType);
     streams[key] = s;

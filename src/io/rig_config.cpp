@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "mmlio/core/error.hpp"
+#include "mmlio/core/log.hpp"
 #include "mmlio/io/yaml_binder.hpp"
 
 namespace mmlio::io {
@@ -28,6 +29,9 @@ void bind(YamlBinder& b, LidarConfig& c) {
   b.field("max_range_m", c.max_range_m, "drop returns farther than this, m");
   b.field("num_rings", c.num_rings, "laser rings (VLP-16: 16) or, for livox, scan lines (Horizon: 6)");
   b.field("enabled", c.enabled, "false: ignore this LiDAR in every mode");
+  if (b.reading() && !b.has("T_imu_sensor"))
+    log::warn(b.location(), ": ", b.path("T_imu_sensor"), " not given: LiDAR '", c.name,
+              "' is taken to sit at the IMU, unrotated (identity); give its extrinsic or calibrate it (mmlio calibrate)");
 }
 
 // `imu:` holds how the IMU arrives (ImuConfig) and the estimator's model of it.
@@ -153,14 +157,22 @@ const char* const kLidarTypes[] = {"velodyne", "ouster", "hesai", "generic_spinn
 
 LidarKind LidarConfig::kind() const { return type == "livox" ? LidarKind::kSolidState : LidarKind::kSpinning; }
 
+namespace {
+// Placeholder mount of the presets' VLP-16: 0.2 m above the Livox IMU, axes aligned. A real rig's
+// differs: placeholderExtrinsics() names a LiDAR still on it.
+Eigen::Isometry3d placeholderSpinningMount() {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(0.0, 0.0, 0.2);
+  return T;
+}
+}  // namespace
+
 std::vector<LidarConfig> defaultLidars() {
   LidarConfig velodyne;
   velodyne.name = "velodyne";
   velodyne.type = "velodyne";
   velodyne.topic = "/velodyne_points";
-  // Placeholder mount: 0.2 m above the Livox IMU, axes aligned. Replace with `mmlio calibrate`
-  // output or the rig drawing.
-  velodyne.T_imu_sensor.translation() = Eigen::Vector3d(0.0, 0.0, 0.2);
+  velodyne.T_imu_sensor = placeholderSpinningMount();  // replace with `mmlio calibrate` or the rig drawing
   velodyne.num_rings = 16;
 
   LidarConfig livox;
@@ -338,6 +350,14 @@ std::string defaultConfigYaml() {
 }
 
 // ---- modes -----------------------------------------------------------------------------------
+
+std::vector<std::string> placeholderExtrinsics(const RigConfig& cfg, const std::string& mode) {
+  std::vector<std::string> names;
+  for (const LidarConfig* l : activeLidars(cfg, mode))
+    if (l->kind() == LidarKind::kSpinning && l->T_imu_sensor.matrix() == placeholderSpinningMount().matrix())
+      names.push_back(l->name);
+  return names;
+}
 
 std::vector<const LidarConfig*> activeLidars(const RigConfig& cfg, const std::string& mode) {
   if (!isValidMode(mode)) throw Error("unknown mode '" + mode + "' (hvi, vi or hi)");

@@ -241,6 +241,16 @@ void YamlBinder::throwChoice(const std::string& where, const std::string& valid,
   throw Error(where + ": must be one of " + valid + ", got '" + got + "'");
 }
 
+bool YamlBinder::has(const std::string& key) const {
+  if (mode_ != Mode::kRead || !node_.IsMap()) return false;
+  const YAML::Node& map = node_;
+  for (auto it = map.begin(); it != map.end(); ++it)
+    if (it->first.IsScalar() && it->first.Scalar() == key) return true;
+  return false;
+}
+
+std::string YamlBinder::location() const { return yamlLocation(file_, node_); }
+
 std::string YamlBinder::where(const std::string& key, const YAML::Node& node) const {
   return yamlLocation(file_, node) + ": " + path(key);
 }

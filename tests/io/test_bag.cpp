@@ -383,6 +383,17 @@ TEST(BagSourceErrors, TopicOfTheWrongTypeNamesFoundAndExpected) {
       << msg;
 }
 
+TEST(BagSourceErrors, ALivoxMessageDeclaredAsASpinningLidarIsAnError) {
+  // The two LiDAR topics swapped (or a Livox topic given type: velodyne): the Livox driver's own
+  // message says what it comes from.
+  const std::string path = writeRigBag();
+  BagSourceOptions o = rigOptions();
+  std::swap(o.lidars[0].topic, o.lidars[1].topic);
+  const std::string msg = errorOf([&] { BagSource(path, o); });
+  EXPECT_NE(msg.find("livox/lidar (LiDAR 'velodyne')"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("declared as a spinning one: give it type: livox"), std::string::npos) << msg;
+}
+
 TEST(BagInfo, DescribesTopicsCountsRatesFieldsPointsAndImuUnit) {
   const BagInfo info = describeBag(writeRigBag());
   EXPECT_EQ(info.begin_ns, kT0);

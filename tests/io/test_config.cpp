@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "mmlio/core/error.hpp"
+#include "mmlio/core/log.hpp"
 #include "mmlio/io/calib_file.hpp"
 #include "mmlio/io/rig_config.hpp"
 #include "mmlio/io/yaml_binder.hpp"
@@ -334,6 +335,25 @@ TEST(Validation, ExtrinsicAlsoAsXyzWithRollPitchYawOrAQuaternion) {
                                              tail, "r.yaml");
   EXPECT_TRUE(typed.lidars[0].T_imu_sensor.linear().isApprox(
       Eigen::AngleAxisd(M_PI / 6, Eigen::Vector3d::UnitZ()).toRotationMatrix(), 1e-4));
+}
+
+TEST(Validation, APlaceholderMountAndAMissingExtrinsicAreNamed) {
+  RigConfig cfg;  // the presets' rig: the VLP-16 on its placeholder mount
+  EXPECT_EQ(placeholderExtrinsics(cfg, "hvi"), std::vector<std::string>{"velodyne"});
+  EXPECT_EQ(placeholderExtrinsics(cfg, "vi"), std::vector<std::string>{"velodyne"});
+  EXPECT_TRUE(placeholderExtrinsics(cfg, "hi").empty());  // the Livox's is its factory extrinsic
+  cfg.lidars[0].T_imu_sensor.translation().z() = 0.21;
+  EXPECT_TRUE(placeholderExtrinsics(cfg, "hvi").empty());
+
+  std::string warned;
+  log::configure(log::Level::kInfo, [&](log::Level, const std::string& m) { warned += m + "\n"; });
+  parseRigConfig("lidars:\n  - {name: a, type: velodyne, topic: /a}\n"
+                 "  - {name: b, type: livox, topic: /b, T_imu_sensor: {xyz: [0, 0, 0], rpy_deg: [0, 0, 0]}}\n"
+                 "reference_lidar: a\n",
+                 "r.yaml");
+  log::configure(log::Level::kInfo);
+  EXPECT_NE(warned.find("r.yaml:2: lidars[0].T_imu_sensor not given: LiDAR 'a'"), std::string::npos) << warned;
+  EXPECT_EQ(warned.find("LiDAR 'b'"), std::string::npos) << warned;
 }
 
 // ---- modes -------------------------------------------------------------------------------

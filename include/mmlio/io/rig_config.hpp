@@ -77,6 +77,9 @@ std::string defaultConfigYaml();
 bool isValidMode(const std::string& mode);
 /// Enabled LiDARs used by `mode`: hvi all, vi spinning, hi solid state. Throws on a bad mode.
 std::vector<const LidarConfig*> activeLidars(const RigConfig& cfg, const std::string& mode);
+/// The active spinning LiDARs of `mode` still on the presets' placeholder mount (0.2 m above the
+/// IMU, axes aligned): fused with it, a real rig's two LiDARs disagree by the mount's error.
+std::vector<std::string> placeholderExtrinsics(const RigConfig& cfg, const std::string& mode);
 /// cfg.reference_lidar when active in `mode`, else the first active LiDAR. Throws if none is active.
 const LidarConfig& referenceLidar(const RigConfig& cfg, const std::string& mode);
 LidarExtrinsic toExtrinsic(const LidarConfig& lidar);

@@ -184,6 +184,10 @@ class YamlBinder {
   /// the declared keys as the fix) or that appears twice. Otherwise a no-op.
   void finish() const;
 
+  /// Reading: whether the node holds `key` (a field left out takes its default).
+  bool has(const std::string& key) const;
+  /// "file:line" of the node being read, for messages about it as a whole.
+  std::string location() const;
   /// Key path of `key` for messages, e.g. "lidars[1].topic".
   std::string path(const std::string& key) const { return prefix_ + key; }
   const std::string& file() const { return file_; }
