@@ -35,7 +35,9 @@ TEST(RunReport, JsonKeepsSectionOrderAndWritesNonFiniteAsNull) {
   ASSERT_GE(keys.size(), 4u);
   EXPECT_EQ(keys[0], "status");
   EXPECT_EQ(keys[1], "trustworthy");
-  EXPECT_EQ(keys[2], "input");
+  EXPECT_EQ(keys[2], "run");  // which mmlio, which settings: what reproduces the run
+  EXPECT_EQ(keys[3], "input");
+  EXPECT_EQ(j["run"]["schema_version"], 1);
   EXPECT_EQ(j["input"]["source"], "office.bag");
   EXPECT_EQ(j["input"]["imu_dropped"]["non_finite"], 3);
   EXPECT_EQ(j["features"]["livox"]["mean_edges"], 15.0);
@@ -53,7 +55,8 @@ TEST(RunReport, MarkdownShowsEveryFieldWithItsValue) {
         check(v, path + k + ".");
         continue;
       }
-      if (k == "figures") continue;  // pictures, shown as images
+      if (k == "figures") continue;      // pictures, shown as images
+      if (k == "config_yaml") continue;  // a file of its own, config_used.yaml, named in the run section
       const std::size_t at = md.find(k);
       ASSERT_NE(at, std::string::npos) << path + k << " missing from report.md";
     }
@@ -62,6 +65,7 @@ TEST(RunReport, MarkdownShowsEveryFieldWithItsValue) {
   EXPECT_NE(md.find("| source | office.bag |"), std::string::npos);
   EXPECT_NE(md.find("| config | config/hvi.yaml |"), std::string::npos);
   EXPECT_NE(md.find("| mode | hvi |"), std::string::npos);
+  EXPECT_NE(md.find("| config | config_used.yaml |"), std::string::npos);
   EXPECT_NE(md.find("| duration_s | 43.025 |"), std::string::npos);
   // A '|' in a value must not split the table row.
   EXPECT_NE(md.find("| message | \\|g\\|=9.802 m/s^2 |"), std::string::npos);
