@@ -1,5 +1,7 @@
 #include "mmlio/core/log.hpp"
 
+#include <unistd.h>
+
 #include <cinttypes>
 #include <cstdio>
 #include <cstdlib>
@@ -51,7 +53,10 @@ void write(Level level, const std::string& message) {
   if (state().sink) {
     state().sink(level, message);
   } else {
-    std::cerr << prefix(level) << message << '\n';
+    // On a terminal a progress bar may own the current line (redrawn with \r): the message takes
+    // the line from its start instead of being glued to the bar's end; the bar redraws below it.
+    static const bool terminal = isatty(fileno(stderr)) != 0;
+    std::cerr << (terminal ? "\r\033[K" : "") << prefix(level) << message << '\n';
   }
 }
 
