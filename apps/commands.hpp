@@ -15,6 +15,7 @@ void registerRunCommand(CLI::App& app);
 void registerBenchCommand(CLI::App& app);
 void registerCalibrateCommand(CLI::App& app);
 void registerConfigCommand(CLI::App& app);
+void registerInitCommand(CLI::App& app);
 
 /// What a calibration estimated, on stdout: the spinning LiDAR's extrinsic, the fit, the clock offset
 /// (`mmlio calibrate` and `mmlio run --calib auto`).

@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   });
 
   mmlio::apps::registerInfoCommand(app);
+  mmlio::apps::registerInitCommand(app);
   mmlio::apps::registerSimulateCommand(app);
   mmlio::apps::registerRunCommand(app);
   mmlio::apps::registerEvaluateCommand(app);

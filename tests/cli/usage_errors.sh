@@ -42,5 +42,13 @@ if ! diff <(grep -v '^#' "$tmp/defaults.yaml") <(grep -v '^#' "$tmp/checked.yaml
 fi
 printf 'odometry:\n  window_size: four\n' > "$tmp/bad.yaml"
 expect 1 config "$tmp/bad.yaml"
+expect 1 init /dev/null                            # not a bag
+
+# init on a simulated rig's bag writes a config that checks, and never overwrites one unasked.
+"$mmlio" -q simulate --scenario office --duration 3 --out "$tmp/sim" >/dev/null 2>&1 || { echo "FAIL: simulate"; failed=1; }
+"$mmlio" init "$tmp/sim/office.bag" --out "$tmp/rig.yaml" >/dev/null || { echo "FAIL: init"; failed=1; }
+"$mmlio" config "$tmp/rig.yaml" > "$tmp/rig_checked.yaml" && grep -q "topic: /velodyne_points" "$tmp/rig_checked.yaml" ||
+  { echo "FAIL: init's config does not check"; failed=1; }
+expect 1 init "$tmp/sim/office.bag" --out "$tmp/rig.yaml"
 rm -rf "$tmp"
 exit $failed

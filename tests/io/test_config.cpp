@@ -23,12 +23,6 @@ namespace {
 
 const std::string kConfigDir = std::string(MMLIO_SOURCE_DIR) + "/config";
 
-#define EXPECT_ERROR_CONTAINS(statement, text)                              \
-  do {                                                                      \
-    const std::string msg_ = errorOf([&] { statement; });                   \
-    EXPECT_NE(msg_.find(text), std::string::npos) << "message: " << msg_;   \
-  } while (0)
-
 struct TempDir {
   fs::path path;
   TempDir() {

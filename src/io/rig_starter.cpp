@@ -1,0 +1,153 @@
+#include "mmlio/io/rig_starter.hpp"
+
+#include <cstdio>
+#include <set>
+#include <sstream>
+#include <vector>
+
+#include "mmlio/core/error.hpp"
+
+namespace mmlio::io {
+namespace {
+
+bool endsWith(const std::string& s, const std::string& tail) {
+  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+bool isImu(const TopicInfo& t) { return endsWith(t.type, "/Imu"); }
+bool isCloud(const TopicInfo& t) { return endsWith(t.type, "/PointCloud2"); }
+bool isLivox(const TopicInfo& t) { return t.type.find("livox") != std::string::npos && endsWith(t.type, "CustomMsg"); }
+
+bool hasField(const TopicInfo& t, const std::string& name) {
+  for (const std::string& f : t.fields)
+    if (f == name || f.rfind(name + "(", 0) == 0) return true;
+  return false;
+}
+
+std::string rate(const TopicInfo& t) {
+  char text[96];
+  if (t.mean_points > 0)
+    std::snprintf(text, sizeof text, "%.1f Hz, %zu messages, %.0f points each", t.rate_hz, t.messages, t.mean_points);
+  else
+    std::snprintf(text, sizeof text, "%.1f Hz, %zu messages", t.rate_hz, t.messages);
+  return text;
+}
+
+struct Lidar {
+  std::string name, type, topic, what, why;
+  int rings = 16;
+  std::string rings_note, extrinsic, extrinsic_note;
+};
+
+// The driver a PointCloud2 comes from, told by its per-point time field.
+Lidar spinningLidar(const TopicInfo& t) {
+  Lidar l;
+  l.topic = t.topic;
+  l.what = rate(t);
+  const bool ring = hasField(t, "ring");
+  if (ring && hasField(t, "time")) {
+    l.type = "velodyne";
+    l.why = "PointCloud2 with ring and time fields: the Velodyne driver's layout";
+    l.rings_note = "CHECK: 16 for a VLP-16 / Puck, 32 or 128 for the larger ones";
+  } else if (ring && hasField(t, "t")) {
+    l.type = "ouster";
+    l.why = "PointCloud2 with ring and t fields: the Ouster driver's layout";
+    l.rings = 64;
+    l.rings_note = "CHECK: the sensor's beams (OS0/OS1/OS2: 32, 64 or 128)";
+  } else if (ring && hasField(t, "timestamp")) {
+    l.type = "hesai";
+    l.why = "PointCloud2 with ring and timestamp fields: the Hesai driver's layout";
+    l.rings = 32;
+    l.rings_note = "CHECK: the sensor's channels (XT32: 32, Pandar64: 64)";
+  } else {
+    l.type = "generic_spinning";
+    l.why = std::string("PointCloud2 without ") + (ring ? "a time field" : "ring and time fields") +
+            ": time from the azimuth, ring from the elevation";
+    l.rings_note = "CHECK: the sensor's rings; elevations are binned into this many";
+  }
+  l.extrinsic = "{xyz: [0.0, 0.0, 0.0], rpy_deg: [0.0, 0.0, 0.0]}";
+  l.extrinsic_note = "CHECK: not in the bag; measure it, or run `mmlio calibrate` with the solid-state LiDAR";
+  return l;
+}
+
+Lidar solidStateLidar(const TopicInfo& t) {
+  Lidar l;
+  l.topic = t.topic;
+  l.what = rate(t);
+  l.type = "livox";
+  l.why = t.type + ": a Livox solid-state LiDAR";
+  l.rings = 6;
+  l.rings_note = "CHECK: scan lines, 6 for a Horizon or an Avia";
+  l.extrinsic = "{xyz: [0.05512, 0.02226, -0.0297], rpy_deg: [0.0, 0.0, 0.0]}";
+  l.extrinsic_note = "a Livox Horizon's factory LiDAR-to-IMU extrinsic: CHECK for another model or an external IMU";
+  return l;
+}
+
+// Unique names: the type for the first of its kind, then type_2, type_3 ...
+void name(std::vector<Lidar>& lidars) {
+  std::set<std::string> used;
+  for (Lidar& l : lidars) {
+    const std::string base = l.type == "generic_spinning" ? "spinning" : l.type;
+    l.name = base;
+    for (int k = 2; used.count(l.name); ++k) l.name = base + "_" + std::to_string(k);
+    used.insert(l.name);
+  }
+}
+
+}  // namespace
+
+std::string starterRigConfig(const BagInfo& info) {
+  std::vector<const TopicInfo*> imus;
+  std::vector<Lidar> spinning, solid;
+  for (const TopicInfo& t : info.topics) {
+    if (isImu(t)) imus.push_back(&t);
+    else if (isCloud(t)) spinning.push_back(spinningLidar(t));
+    else if (isLivox(t)) solid.push_back(solidStateLidar(t));
+  }
+  if (imus.empty()) throw Error(info.path + " has no sensor_msgs/Imu topic: mmlio needs an IMU");
+  if (spinning.empty() && solid.empty())
+    throw Error(info.path + " has no point-cloud topic (sensor_msgs/PointCloud2 or a Livox CustomMsg)");
+  // The IMU with the most samples per second: a LiDAR's built-in IMU (Livox: 200 Hz) over a
+  // vehicle's slower one.
+  const TopicInfo* imu = imus.front();
+  for (const TopicInfo* t : imus)
+    if (t->rate_hz > imu->rate_hz) imu = t;
+  std::vector<Lidar> lidars = spinning;
+  lidars.insert(lidars.end(), solid.begin(), solid.end());
+  name(lidars);
+  const std::string mode = !spinning.empty() && !solid.empty() ? "hvi" : (!spinning.empty() ? "vi" : "hi");
+  const std::string reference = lidars.front().name;
+
+  std::ostringstream y;
+  y << "# mmlio rig config for " << info.path << ", written by `mmlio init`.\n"
+    << "# Only what differs from the defaults (`mmlio config --dump-defaults` lists every key with its\n"
+    << "# meaning); `mmlio config THIS_FILE` checks it. Read every line marked CHECK.\n";
+  y << "mode: " << mode << "  # "
+    << (mode == "hvi"   ? "a spinning and a solid-state LiDAR: fused (vi: the spinning one alone, hi: the solid-state one)"
+        : mode == "vi" ? "only spinning LiDARs in the bag"
+                       : "only solid-state LiDARs in the bag")
+    << "\n";
+  y << "reference_lidar: " << reference << "  # its sweeps define the fusion window\n";
+  y << "imu:\n  topic: " << imu->topic << "  # " << rate(*imu);
+  if (imus.size() > 1) {
+    y << "; the fastest of";
+    for (const TopicInfo* t : imus) y << " " << t->topic;
+  }
+  y << "\n";
+  if (!info.imu_unit_guess.empty())
+    y << "  # accelerations read as " << info.imu_unit_guess
+      << " at the bag's start; acc_unit: auto (the default) detects it again at every run\n";
+  y << "lidars:\n";
+  for (const Lidar& l : lidars) {
+    y << "  - name: " << l.name << "\n"
+      << "    type: " << l.type << "  # " << l.why << "\n"
+      << "    topic: " << l.topic << "  # " << l.what << "\n"
+      << "    num_rings: " << l.rings << "  # " << l.rings_note << "\n"
+      << "    T_imu_sensor: " << l.extrinsic << "  # " << l.extrinsic_note << "\n";
+  }
+  for (const TopicInfo& t : info.topics)
+    if (t.topic == "/tf_static" || t.topic == "tf_static")
+      y << "# The bag has " << t.topic << ": its transforms are not read yet; copy the LiDAR-to-IMU ones above.\n";
+  return y.str();
+}
+
+}  // namespace mmlio::io
