@@ -188,6 +188,16 @@ LidarScan decodePointCloud2(const sensor_msgs::PointCloud2& msg, const CloudDeco
   FieldReader fi = findField(msg, "intensity");
   if (!fi.present) fi = findField(msg, "reflectivity");
   const FieldReader fring = findField(msg, "ring");
+  // The fields tell the kind of LiDAR; a declared kind that disagrees (a wrong type, swapped
+  // topics) would run without a word, on rings and sweeps the points do not have.
+  if (o.kind == LidarKind::kSolidState && fring.present)
+    throw Error("its points have a ring field, a spinning LiDAR's, but LiDAR '" + o.sensor +
+                "' is declared solid-state (type: livox): give it its spinning type (velodyne, ouster, hesai, "
+                "generic_spinning) or check that the topics are not swapped");
+  if (o.kind == LidarKind::kSpinning && !fring.present && findField(msg, "tag").present &&
+      findField(msg, "line").present)
+    throw Error("its points have a Livox driver's tag and line fields, but LiDAR '" + o.sensor +
+                "' is declared as a spinning one: give it type: livox");
 
   enum class TimeKind { kRelativeS, kRelativeNs, kAbsoluteS, kAzimuth } time_kind = TimeKind::kAzimuth;
   FieldReader ft = findField(msg, "time");

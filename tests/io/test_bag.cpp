@@ -394,6 +394,22 @@ TEST(BagSourceErrors, ALivoxMessageDeclaredAsASpinningLidarIsAnError) {
   EXPECT_NE(msg.find("declared as a spinning one: give it type: livox"), std::string::npos) << msg;
 }
 
+TEST(BagSourceErrors, ACloudWhoseFieldsSayTheOtherKindOfLidarStopsTheRunSayingWhy) {
+  // A VLP-16's PointCloud2 (ring field) declared solid-state: its first cloud says so.
+  const std::string path = writeRigBag();
+  BagSourceOptions o = rigOptions();
+  o.lidars[0].kind = LidarKind::kSolidState;
+  const std::string msg = errorOf([&] {
+    BagSource src(path, o);
+    SensorEvent e;
+    while (src.next(&e)) {
+    }
+  });
+  EXPECT_NE(msg.find("/velodyne_points"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("ring field, a spinning LiDAR's, but LiDAR 'velodyne' is declared solid-state"), std::string::npos)
+      << msg;
+}
+
 TEST(BagInfo, DescribesTopicsCountsRatesFieldsPointsAndImuUnit) {
   const BagInfo info = describeBag(writeRigBag());
   EXPECT_EQ(info.begin_ns, kT0);
