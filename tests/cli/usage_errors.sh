@@ -45,10 +45,19 @@ expect 1 config "$tmp/bad.yaml"
 expect 1 init /dev/null                            # not a bag
 
 # init on a simulated rig's bag writes a config that checks, and never overwrites one unasked.
-"$mmlio" -q simulate --scenario office --duration 3 --out "$tmp/sim" >/dev/null 2>&1 || { echo "FAIL: simulate"; failed=1; }
+"$mmlio" -q simulate --scenario office --duration 8 --out "$tmp/sim" >/dev/null 2>&1 || { echo "FAIL: simulate"; failed=1; }
 "$mmlio" init "$tmp/sim/office.bag" --out "$tmp/rig.yaml" >/dev/null || { echo "FAIL: init"; failed=1; }
 "$mmlio" config "$tmp/rig.yaml" > "$tmp/rig_checked.yaml" && grep -q "topic: /velodyne_points" "$tmp/rig_checked.yaml" ||
   { echo "FAIL: init's config does not check"; failed=1; }
 expect 1 init "$tmp/sim/office.bag" --out "$tmp/rig.yaml"
+# ... and runs exactly as the preset does on the rig the preset describes (true calibration given).
+for cfg in "$tmp/rig.yaml" "$(dirname "$0")/../../config/hvi.yaml"; do
+  "$mmlio" -q run "$tmp/sim/office.bag" --config "$cfg" --calib "$tmp/sim/office_truth.yaml" --no-loop --no-progress \
+    --out "$tmp/run_$(basename "$cfg" .yaml)" >/dev/null 2>&1 || true
+done
+if [ "$(grep -vc "^#" "$tmp/run_rig/trajectory.tum" 2>/dev/null)" -lt 30 ] || ! cmp -s "$tmp/run_rig/trajectory.tum" "$tmp/run_hvi/trajectory.tum"; then
+  echo "FAIL: init's config and the preset give different trajectories"
+  failed=1
+fi
 rm -rf "$tmp"
 exit $failed
