@@ -3,8 +3,11 @@
 #include <rosbag/bag.h>
 #include <rosbag/exceptions.h>
 #include <rosbag/view.h>
+#include <sensor_msgs/Imu.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <set>
@@ -21,6 +24,10 @@ namespace mmlio::io {
 namespace {
 
 constexpr int kSampledMessages = 50;
+
+// Frame names as tf2 spells them: without a leading '/'.
+std::string withoutSlash(const std::string& frame) { return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame; }
+
 const std::vector<std::string> kLivoxFields{"offset_time(uint32)", "x(float32)", "y(float32)", "z(float32)",
                                             "reflectivity(uint8)", "tag(uint8)", "line(uint8)"};
 
@@ -34,10 +41,12 @@ void sampleClouds(rosbag::Bag& bag, const std::vector<std::string>& names, Topic
       if (n >= kSampledMessages) break;
       if (const auto c = m.instantiate<sensor_msgs::PointCloud2>()) {
         if (info.fields.empty()) info.fields = pointFieldDescriptions(*c);
+        if (n == 0) info.frame_id = withoutSlash(c->header.frame_id);
         points += static_cast<double>(c->width) * c->height;
         ++n;
       } else if (const auto l = m.instantiate<LivoxCustomMsg>()) {
         if (info.fields.empty()) info.fields = kLivoxFields;
+        if (n == 0) info.frame_id = withoutSlash(l->header.frame_id);
         points += static_cast<double>(l->points.size());
         ++n;
       }
@@ -46,6 +55,36 @@ void sampleClouds(rosbag::Bag& bag, const std::vector<std::string>& names, Topic
     log::warn("info: cannot read all sampled messages of ", info.topic, ": ", e.what());
   }
   if (n > 0) info.mean_points = points / n;
+}
+
+std::string imuFrameId(rosbag::Bag& bag, const std::string& topic) {
+  rosbag::View view(bag, rosbag::TopicQuery(topic));
+  for (const rosbag::MessageInstance& m : view)
+    if (const auto imu = m.instantiate<sensor_msgs::Imu>()) return imu->header.frame_id;
+  return "";
+}
+
+/// Every transform the bag's /tf_static holds (latched: usually one message at the start).
+std::vector<StaticTransform> staticTransforms(rosbag::Bag& bag, const std::string& topic) {
+  std::vector<StaticTransform> out;
+  rosbag::View view(bag, rosbag::TopicQuery(topic));
+  for (const rosbag::MessageInstance& m : view) {
+    const auto tf = m.instantiate<tf2_msgs::TFMessage>();
+    if (!tf) continue;
+    for (const geometry_msgs::TransformStamped& t : tf->transforms) {
+      StaticTransform s;
+      s.parent = withoutSlash(t.header.frame_id);
+      s.child = withoutSlash(t.child_frame_id);
+      const auto& r = t.transform.rotation;
+      const auto& p = t.transform.translation;
+      Eigen::Quaterniond q(r.w, r.x, r.y, r.z);
+      if (!std::isfinite(q.norm()) || q.norm() < 1e-6) continue;
+      s.T_parent_child.linear() = q.normalized().toRotationMatrix();
+      s.T_parent_child.translation() = Eigen::Vector3d(p.x, p.y, p.z);
+      out.push_back(std::move(s));
+    }
+  }
+  return out;
 }
 
 BagInfo describeRos2Bag(const std::string& path) {
@@ -139,7 +178,12 @@ BagInfo describeBag(const std::string& path) {
       if (type == "sensor_msgs/PointCloud2" || type == kLivoxCustomMsgType || type == kLivox2CustomMsgType) {
         sampleClouds(bag, {topic}, t);
       }
-      if (type == "sensor_msgs/Imu" && info.imu_unit_guess.empty()) info.imu_unit_guess = guessImuUnit(bag, topic);
+      if (type == "sensor_msgs/Imu") {
+        if (info.imu_unit_guess.empty()) info.imu_unit_guess = guessImuUnit(bag, topic);
+        t.frame_id = withoutSlash(imuFrameId(bag, topic));
+      }
+      if (type == "tf2_msgs/TFMessage" && withoutSlash(topic) == "tf_static")
+        info.static_transforms = staticTransforms(bag, topic);
       info.topics.push_back(std::move(t));
     }
   } catch (const rosbag::BagException& e) {

@@ -1,6 +1,9 @@
 #include "mmlio/io/rig_starter.hpp"
 
 #include <cstdio>
+#include <deque>
+#include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <vector>
@@ -33,7 +36,7 @@ std::string rate(const TopicInfo& t) {
 }
 
 struct Lidar {
-  std::string name, type, topic, what, why;
+  std::string name, type, topic, what, why, frame;
   int rings = 16;
   std::string rings_note, extrinsic, extrinsic_note;
 };
@@ -43,6 +46,7 @@ Lidar spinningLidar(const TopicInfo& t) {
   Lidar l;
   l.topic = t.topic;
   l.what = rate(t);
+  l.frame = t.frame_id;
   const bool ring = hasField(t, "ring");
   if (ring && hasField(t, "time")) {
     l.type = "velodyne";
@@ -73,6 +77,7 @@ Lidar solidStateLidar(const TopicInfo& t) {
   Lidar l;
   l.topic = t.topic;
   l.what = rate(t);
+  l.frame = t.frame_id;
   l.type = "livox";
   l.why = t.type + ": a Livox solid-state LiDAR";
   l.rings = 6;
@@ -80,6 +85,38 @@ Lidar solidStateLidar(const TopicInfo& t) {
   l.extrinsic = "{xyz: [0.05512, 0.02226, -0.0297], rpy_deg: [0.0, 0.0, 0.0]}";
   l.extrinsic_note = "a Livox Horizon's factory LiDAR-to-IMU extrinsic: CHECK for another model or an external IMU";
   return l;
+}
+
+/// T_to_from through the static transform tree (either direction of each edge), if connected.
+std::optional<Eigen::Isometry3d> chain(const std::vector<StaticTransform>& tfs, const std::string& to,
+                                       const std::string& from) {
+  if (to.empty() || from.empty()) return std::nullopt;
+  std::map<std::string, Eigen::Isometry3d> T_to;  // T_to_frame of every frame reached
+  T_to[to] = Eigen::Isometry3d::Identity();
+  std::deque<std::string> open{to};
+  while (!open.empty()) {
+    const std::string f = open.front();
+    open.pop_front();
+    if (f == from) return T_to[f];
+    for (const StaticTransform& t : tfs) {
+      if (t.parent == f && !T_to.count(t.child)) {
+        T_to[t.child] = T_to[f] * t.T_parent_child;
+        open.push_back(t.child);
+      } else if (t.child == f && !T_to.count(t.parent)) {
+        T_to[t.parent] = T_to[f] * t.T_parent_child.inverse();
+        open.push_back(t.parent);
+      }
+    }
+  }
+  return std::nullopt;
+}
+
+std::string xyzQuaternion(const Eigen::Isometry3d& T) {
+  const Eigen::Quaterniond q(T.linear());
+  char text[256];
+  std::snprintf(text, sizeof text, "{xyz: [%.6f, %.6f, %.6f], quaternion: [%.9f, %.9f, %.9f, %.9f]}", T.translation().x(),
+                T.translation().y(), T.translation().z(), q.x(), q.y(), q.z(), q.w());
+  return text;
 }
 
 // Unique names: the type for the first of its kind, then type_2, type_3 ...
@@ -114,6 +151,17 @@ std::string starterRigConfig(const BagInfo& info) {
   std::vector<Lidar> lidars = spinning;
   lidars.insert(lidars.end(), solid.begin(), solid.end());
   name(lidars);
+  // Extrinsics the bag's /tf_static gives: the IMU's frame to each LiDAR's.
+  const std::string& imu_frame = imu->frame_id;
+  for (Lidar& l : lidars) {
+    if (info.static_transforms.empty()) continue;
+    if (const auto T = chain(info.static_transforms, imu_frame, l.frame)) {
+      l.extrinsic = xyzQuaternion(*T);
+      l.extrinsic_note = "from /tf_static: " + l.frame + " in " + imu_frame + "; CHECK it is the mount, not a placeholder";
+    } else {
+      l.extrinsic_note += " (/tf_static does not connect '" + imu_frame + "' and '" + l.frame + "')";
+    }
+  }
   const std::string mode = !spinning.empty() && !solid.empty() ? "hvi" : (!spinning.empty() ? "vi" : "hi");
   const std::string reference = lidars.front().name;
 
@@ -144,9 +192,6 @@ std::string starterRigConfig(const BagInfo& info) {
       << "    num_rings: " << l.rings << "  # " << l.rings_note << "\n"
       << "    T_imu_sensor: " << l.extrinsic << "  # " << l.extrinsic_note << "\n";
   }
-  for (const TopicInfo& t : info.topics)
-    if (t.topic == "/tf_static" || t.topic == "tf_static")
-      y << "# The bag has " << t.topic << ": its transforms are not read yet; copy the LiDAR-to-IMU ones above.\n";
   return y.str();
 }
 

@@ -1,8 +1,16 @@
 // mmlio init: a starter rig config from a bag's topics.
 #include <gtest/gtest.h>
+#include <rosbag/bag.h>
+#include <sensor_msgs/Imu.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include <cstring>
+#include <filesystem>
 
 #include "error_of.hpp"
 #include "mmlio/core/error.hpp"
+#include "mmlio/io/bag_info.hpp"
 #include "mmlio/io/rig_config.hpp"
 #include "mmlio/io/rig_starter.hpp"
 
@@ -67,6 +75,76 @@ TEST(StarterRigConfig, TheCloudsFieldsNameTheDriverAndTheKindsNameTheMode) {
   ASSERT_EQ(two.lidars.size(), 2u);
   EXPECT_EQ(two.lidars[0].name, "livox");
   EXPECT_EQ(two.lidars[1].name, "livox_2");
+}
+
+geometry_msgs::TransformStamped transform(const std::string& parent, const std::string& child,
+                                         const Eigen::Isometry3d& T) {
+  geometry_msgs::TransformStamped t;
+  t.header.frame_id = parent;
+  t.child_frame_id = child;
+  const Eigen::Quaterniond q(T.linear());
+  t.transform.rotation.x = q.x();
+  t.transform.rotation.y = q.y();
+  t.transform.rotation.z = q.z();
+  t.transform.rotation.w = q.w();
+  t.transform.translation.x = T.translation().x();
+  t.transform.translation.y = T.translation().y();
+  t.transform.translation.z = T.translation().z();
+  return t;
+}
+
+TEST(StarterRigConfig, ExtrinsicsComeFromTheBagsTfStaticThroughTheFrameTree) {
+  // base_link carries the IMU (turned 90 deg, 0.1 m ahead) and the VLP-16 (0.5 m up): the LiDAR in
+  // the IMU's frame is found through base_link, whichever way the transforms point.
+  Eigen::Isometry3d T_base_imu = Eigen::Isometry3d::Identity();
+  T_base_imu.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T_base_imu.translation() = Eigen::Vector3d(0.1, 0.0, 0.2);
+  Eigen::Isometry3d T_base_velodyne = Eigen::Isometry3d::Identity();
+  T_base_velodyne.translation() = Eigen::Vector3d(0.0, 0.0, 0.5);
+  const std::string path = (std::filesystem::temp_directory_path() / "mmlio_tf_static.bag").string();
+  {
+    rosbag::Bag bag(path, rosbag::bagmode::Write);
+    const ros::Time t0(1700000000, 0);
+    tf2_msgs::TFMessage tf;
+    tf.transforms = {transform("base_link", "imu_link", T_base_imu), transform("/base_link", "velodyne", T_base_velodyne)};
+    bag.write("/tf_static", t0, tf);
+    for (int k = 0; k < 3; ++k) {
+      const ros::Time t = t0 + ros::Duration(0.1 * k);
+      sensor_msgs::Imu imu;
+      imu.header.stamp = t;
+      imu.header.frame_id = "/imu_link";
+      imu.linear_acceleration.z = 9.81;
+      bag.write("/imu", t, imu);
+      sensor_msgs::PointCloud2 cloud;
+      cloud.header.stamp = t;
+      cloud.header.frame_id = "velodyne";
+      for (const auto& [name, offset, type] : {std::tuple<const char*, int, int>{"x", 0, 7}, {"y", 4, 7}, {"z", 8, 7},
+                                               {"ring", 12, 4}, {"time", 16, 7}}) {
+        sensor_msgs::PointField f;
+        f.name = name;
+        f.offset = offset;
+        f.datatype = static_cast<std::uint8_t>(type);
+        f.count = 1;
+        cloud.fields.push_back(f);
+      }
+      cloud.point_step = 20;
+      cloud.width = 1;
+      cloud.height = 1;
+      cloud.row_step = 20;
+      cloud.data.assign(20, 0);
+      const float x = 5.0f;
+      std::memcpy(cloud.data.data(), &x, 4);
+      bag.write("/velodyne_points", t, cloud);
+    }
+  }
+  const BagInfo info = describeBag(path);
+  ASSERT_EQ(info.static_transforms.size(), 2u);
+  const RigConfig cfg = parseRigConfig(starterRigConfig(info), "starter.yaml");
+  ASSERT_EQ(cfg.lidars.size(), 1u);
+  EXPECT_EQ(cfg.lidars[0].type, "velodyne");
+  const Eigen::Isometry3d want = T_base_imu.inverse() * T_base_velodyne;
+  EXPECT_TRUE(cfg.lidars[0].T_imu_sensor.isApprox(want, 1e-6)) << cfg.lidars[0].T_imu_sensor.matrix();
+  std::filesystem::remove(path);
 }
 
 TEST(StarterRigConfig, ABagWithoutAnImuOrALidarIsAnError) {

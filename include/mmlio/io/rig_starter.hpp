@@ -9,7 +9,8 @@ namespace mmlio::io {
 
 /// The rig config text for a bag described by `info`: the IMU topic, one LiDAR per point-cloud
 /// topic (spinning: PointCloud2, its type from the point fields; solid state: a Livox CustomMsg),
-/// the mode their kinds allow, extrinsics to check or calibrate. Throws mmlio::Error when the bag
+/// the mode their kinds allow, extrinsics from /tf_static where it connects the IMU's frame to a
+/// LiDAR's (ROS 1 bags), otherwise to check or calibrate. Throws mmlio::Error when the bag
 /// has no IMU or no LiDAR topic (mmlio needs both).
 std::string starterRigConfig(const BagInfo& info);
 
