@@ -75,7 +75,9 @@ void writeCurve(const std::string& path, const std::vector<CurvePoint>& curve) {
 double cpuSeconds() {  // user + system time of every thread of this process so far
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
-  const auto sec = [](const timeval& t) { return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec); };
+  const auto sec = [](const timeval& t) {
+    return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec);
+  };
   return sec(usage.ru_utime) + sec(usage.ru_stime);
 }
 
@@ -104,13 +106,13 @@ void bench(const BenchArgs& a) {
     const double cpu0 = cpuSeconds();
     const pipeline::RunResult r = pipeline::runBag(options);
     const double wall_s = wall.elapsedMs() * 1e-3, cpu_s = cpuSeconds() - cpu0;
-    const double bag_s = r.trajectory.empty()
-                             ? 0.0
-                             : toSec(r.trajectory.back().stamp_ns - r.trajectory.front().stamp_ns);
-    std::printf("pass %d/%d: %zu sweeps, %.1f s of bag in %.2f s wall (%.1fx real time), CPU %.2f s (%.1fx real time "
-                "on one core), peak RSS %.0f MB\n",
-                pass, a.repeat, r.timing.sweeps(), bag_s, wall_s, bag_s / std::max(1e-9, wall_s), cpu_s,
-                bag_s / std::max(1e-9, cpu_s), peakRssMb());
+    const double bag_s =
+        r.trajectory.empty() ? 0.0 : toSec(r.trajectory.back().stamp_ns - r.trajectory.front().stamp_ns);
+    std::printf(
+        "pass %d/%d: %zu sweeps, %.1f s of bag in %.2f s wall (%.1fx real time), CPU %.2f s (%.1fx real time "
+        "on one core), peak RSS %.0f MB\n",
+        pass, a.repeat, r.timing.sweeps(), bag_s, wall_s, bag_s / std::max(1e-9, wall_s), cpu_s,
+        bag_s / std::max(1e-9, cpu_s), peakRssMb());
     if (pass == a.repeat) {
       printPasses(curve, a.replays);
       if (!a.curve.empty()) writeCurve(a.curve, curve);
@@ -126,10 +128,14 @@ void registerBenchCommand(CLI::App& app) {
   auto args = std::make_shared<BenchArgs>();
   CLI::App* cmd = app.add_subcommand(
       "bench", "Per-stage timing (mean / p95 / p99 / max ms per sweep), real-time factors and memory on a bag");
-  cmd->add_option("bag", args->bag, "Input bag: ROS 1 .bag, ROS 2 .mcap, rosbag2 folder or .db3 (e.g. from `mmlio simulate`)")->required()->check(CLI::ExistingPath);
+  cmd->add_option("bag", args->bag,
+                  "Input bag: ROS 1 .bag, ROS 2 .mcap, rosbag2 folder or .db3 (e.g. from `mmlio simulate`)")
+      ->required()
+      ->check(CLI::ExistingPath);
   cmd->add_option("-c,--config", args->config, "Rig config YAML (default: built-in)")->check(CLI::ExistingFile);
   cmd->add_option("-m,--mode", args->mode, "hvi | vi | hi")->check(CLI::IsMember({"hvi", "vi", "hi"}));
-  cmd->add_option("--calib", args->calib, "Calibration YAML overriding the config's extrinsics (as `mmlio run --calib`)")
+  cmd->add_option("--calib", args->calib,
+                  "Calibration YAML overriding the config's extrinsics (as `mmlio run --calib`)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--replay", args->replays,
                   "Play the bag this many times back to back as ONE sequence (long-run memory)")

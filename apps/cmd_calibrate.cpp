@@ -39,21 +39,25 @@ void calibrate(const CalibrateArgs& a) {
 void printCalibration(const pipeline::BagCalibrationResult& r) {
   const Eigen::Isometry3d& T = r.calibration.at(r.spinning).T_imu_sensor;
   const Eigen::Vector3d ypr = T.rotation().eulerAngles(2, 1, 0) * 180.0 / M_PI;
-  std::printf("%s -> IMU: translation (%.4f, %.4f, %.4f) m, yaw/pitch/roll (%.3f, %.3f, %.3f) deg\n", r.spinning.c_str(),
-              T.translation().x(), T.translation().y(), T.translation().z(), ypr.x(), ypr.y(), ypr.z());
+  std::printf("%s -> IMU: translation (%.4f, %.4f, %.4f) m, yaw/pitch/roll (%.3f, %.3f, %.3f) deg\n",
+              r.spinning.c_str(), T.translation().x(), T.translation().y(), T.translation().z(), ypr.x(), ypr.y(),
+              ypr.z());
   std::printf("  %s\n", r.spatial.message.c_str());
   if (r.temporal.ok)
     std::printf("  clock offset %.2f +- %.2f ms (t_imu = t_stamp + offset)\n", 1e3 * r.temporal.offset_s,
                 1e3 * r.temporal.sigma_s);
   else
-    std::printf("  clock offset not estimated: %s\n", r.temporal.message.empty() ? "disabled" : r.temporal.message.c_str());
+    std::printf("  clock offset not estimated: %s\n",
+                r.temporal.message.empty() ? "disabled" : r.temporal.message.c_str());
 }
 
 void registerCalibrateCommand(CLI::App& app) {
   auto args = std::make_shared<CalibrateArgs>();
   CLI::App* cmd = app.add_subcommand(
       "calibrate", "Spinning-to-solid-state LiDAR extrinsic and clock offset from a bag that starts at rest");
-  cmd->add_option("bag", args->bag, "Input bag (ROS 1 .bag, ROS 2 .mcap, rosbag2 folder or .db3): standing still for the first second, then turning")
+  cmd->add_option("bag", args->bag,
+                  "Input bag (ROS 1 .bag, ROS 2 .mcap, rosbag2 folder or .db3): standing still for the first second, "
+                  "then turning")
       ->required()
       ->check(CLI::ExistingPath);
   cmd->add_option("-c,--config", args->config, "Rig config YAML (its extrinsics are the initial guess)")

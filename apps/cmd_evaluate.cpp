@@ -91,7 +91,8 @@ MapSharpness mapSharpness(const std::string& map_path, const std::string& scenar
   }
   if (!reference.path.empty()) {
     const sim::MapScore ref = sim::scoreMap(scene, transformed(io::readPcd(reference.path), reference.T_gt_est));
-    if (ref.on_surface.empty()) throw Error("evaluate: reference map '" + reference.path + "' has no static-surface points");
+    if (ref.on_surface.empty())
+      throw Error("evaluate: reference map '" + reference.path + "' has no static-surface points");
     s.static_kept = sim::staticPointsKept(s.score.on_surface, ref.on_surface);
   }
   return s;
@@ -108,8 +109,10 @@ Trajectory readNonEmptyTum(const std::string& path, const char* what) {
 
 std::string row(const char* name, double value, const char* unit, const char* format = "%.4f") {
   char number[64];
-  if (std::isfinite(value)) std::snprintf(number, sizeof(number), format, value);
-  else std::snprintf(number, sizeof(number), "n/a");
+  if (std::isfinite(value))
+    std::snprintf(number, sizeof(number), format, value);
+  else
+    std::snprintf(number, sizeof(number), "n/a");
   char line[160];
   std::snprintf(line, sizeof(line), "  %-22s %12s%s%s\n", name, number, *unit ? " " : "", unit);
   return line;
@@ -146,7 +149,8 @@ void runEvaluate(const EvaluateArgs& args) {
   eval::EvalOptions options = args.options;
   options.align = !args.no_align;
   options.scale = args.scale;
-  if (!(options.max_gap_s > 0.0)) throw Error("evaluate: --max-gap must be positive, got " + std::to_string(options.max_gap_s));
+  if (!(options.max_gap_s > 0.0))
+    throw Error("evaluate: --max-gap must be positive, got " + std::to_string(options.max_gap_s));
   if (!(options.segment_m > 0.0)) throw Error("evaluate: --segment must be positive");
   if (args.no_align && args.scale) throw Error("evaluate: --scale needs alignment; drop --no-align");
 
@@ -158,7 +162,8 @@ void runEvaluate(const EvaluateArgs& args) {
   ReferenceMap reference;
   if (!args.reference_map_path.empty()) {
     reference.path = args.reference_map_path;
-    reference.T_gt_est = eval::evaluate(gt, readNonEmptyTum(args.reference_est_path, "reference"), options).T_gt_est_pose;
+    reference.T_gt_est =
+        eval::evaluate(gt, readNonEmptyTum(args.reference_est_path, "reference"), options).T_gt_est_pose;
   }
   MapSharpness map;
   if (!args.map_path.empty())
@@ -170,15 +175,16 @@ void runEvaluate(const EvaluateArgs& args) {
       char extra[400];
       char kept[64] = "";
       if (map.static_kept >= 0.0) std::snprintf(kept, sizeof(kept), ", \"map_static_kept\": %.5f", map.static_kept);
-      std::snprintf(extra, sizeof(extra),
-                    ", \"map_points\": %zu, \"map_median_m\": %.5f, \"map_p90_m\": %.5f, \"map_off_surface_fraction\": %.5f, "
-                    "\"map_static_voxels\": %zu%s%s}",
-                    map.score.points, map.score.median_m, map.score.p90_m, map.score.off_surface_fraction,
-                    map.score.static_voxels,
-                    map.static_voxels_removed < 0
-                        ? ""
-                        : (", \"map_static_voxels_removed\": " + std::to_string(map.static_voxels_removed)).c_str(),
-                    kept);
+      std::snprintf(
+          extra, sizeof(extra),
+          ", \"map_points\": %zu, \"map_median_m\": %.5f, \"map_p90_m\": %.5f, \"map_off_surface_fraction\": %.5f, "
+          "\"map_static_voxels\": %zu%s%s}",
+          map.score.points, map.score.median_m, map.score.p90_m, map.score.off_surface_fraction,
+          map.score.static_voxels,
+          map.static_voxels_removed < 0
+              ? ""
+              : (", \"map_static_voxels_removed\": " + std::to_string(map.static_voxels_removed)).c_str(),
+          kept);
       line.pop_back();
       line += extra;
     }
@@ -196,7 +202,8 @@ void runEvaluate(const EvaluateArgs& args) {
         std::cout << row("... only removed", static_cast<double>(map.static_voxels_removed), "(only --removed covers)",
                          "%.0f");
       if (map.static_kept >= 0.0)
-        std::cout << row("static points kept", 100.0 * map.static_kept, "% of the reference map's (within 10 cm)", "%.1f");
+        std::cout << row("static points kept", 100.0 * map.static_kept, "% of the reference map's (within 10 cm)",
+                         "%.1f");
     }
     if (!args.plot_path.empty()) std::cout << "  plot                   " << args.plot_path << '\n';
   }
@@ -207,7 +214,8 @@ void runEvaluate(const EvaluateArgs& args) {
 void registerEvaluateCommand(CLI::App& app) {
   auto args = std::make_shared<EvaluateArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "evaluate", "Compare an estimated trajectory with ground truth (TUM files): ATE, RPE per 10 m, end-to-end, coverage");
+      "evaluate",
+      "Compare an estimated trajectory with ground truth (TUM files): ATE, RPE per 10 m, end-to-end, coverage");
   cmd->add_option("--gt", args->gt_path, "Ground-truth trajectory, TUM format")->required();
   cmd->add_option("--est", args->est_path, "Estimated trajectory, TUM format")->required();
   cmd->add_option("--plot", args->plot_path, "Write the evaluation figure (top view + error over time) to this PNG");
@@ -224,17 +232,20 @@ void registerEvaluateCommand(CLI::App& app) {
   cmd->add_option("--scenario", args->map_scenario, "Simulated scenario whose surfaces --map is scored against")
       ->check(CLI::IsMember(sim::scenarioNames()));
   cmd->get_option("--map")->needs(cmd->get_option("--scenario"));
-  cmd->add_option("--off-surface", args->off_surface_path,
-                  "With --map: write its points farther than 10 cm from every true surface to this PCD (ground-truth frame)")
+  cmd->add_option(
+         "--off-surface", args->off_surface_path,
+         "With --map: write its points farther than 10 cm from every true surface to this PCD (ground-truth frame)")
       ->needs(cmd->get_option("--map"));
-  cmd->add_option("--removed", args->removed_path,
-                  "With --map: the points the run removed (map_dynamic.pcd); counts the static surface voxels only they "
-                  "cover (what the dynamic handling took out of the map)")
+  cmd->add_option(
+         "--removed", args->removed_path,
+         "With --map: the points the run removed (map_dynamic.pcd); counts the static surface voxels only they "
+         "cover (what the dynamic handling took out of the map)")
       ->check(CLI::ExistingFile)
       ->needs(cmd->get_option("--map"));
-  cmd->add_option("--reference-map", args->reference_map_path,
-                  "With --map: the map of the same scene run without people (PCD, its run's estimate frame); reports the "
-                  "share of its static-surface points that --map still has within 10 cm")
+  cmd->add_option(
+         "--reference-map", args->reference_map_path,
+         "With --map: the map of the same scene run without people (PCD, its run's estimate frame); reports the "
+         "share of its static-surface points that --map still has within 10 cm")
       ->check(CLI::ExistingFile)
       ->needs(cmd->get_option("--map"));
   cmd->add_option("--reference-est", args->reference_est_path,

@@ -43,13 +43,16 @@ pipeline::Json toJson(const io::BagInfo& info) {
 void registerInfoCommand(CLI::App& app) {
   auto bag = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
-  CLI::App* cmd = app.add_subcommand("info", "Describe a ROS 1 or ROS 2 bag: topics, types, rates, point fields, IMU unit");
+  CLI::App* cmd =
+      app.add_subcommand("info", "Describe a ROS 1 or ROS 2 bag: topics, types, rates, point fields, IMU unit");
   cmd->add_option("bag", *bag, "ROS 1 .bag, ROS 2 .mcap, rosbag2 folder or .db3")->required();
   cmd->add_flag("--json", *json, "one JSON object instead of the table");
   cmd->callback([bag, json] {
     const io::BagInfo info = io::describeBag(*bag);
-    if (*json) std::cout << toJson(info).dump(-1) << '\n';
-    else std::cout << io::formatBagInfo(info);
+    if (*json)
+      std::cout << toJson(info).dump(-1) << '\n';
+    else
+      std::cout << io::formatBagInfo(info);
   });
 }
 

@@ -30,19 +30,21 @@ void init(const InitArgs& a) {
     std::ofstream file(a.out);
     if (!(file << text)) throw Error("cannot write " + a.out);
   }
-  std::printf("written: %s\n"
-              "next: read the lines marked CHECK, then\n"
-              "  mmlio config %s                                   # checks it\n"
-              "  mmlio calibrate %s --config %s --out calib.yaml   # a still start, then turns\n"
-              "  mmlio run %s --config %s --calib calib.yaml --out out\n",
-              a.out.c_str(), a.out.c_str(), a.bag.c_str(), a.out.c_str(), a.bag.c_str(), a.out.c_str());
+  std::printf(
+      "written: %s\n"
+      "next: read the lines marked CHECK, then\n"
+      "  mmlio config %s                                   # checks it\n"
+      "  mmlio calibrate %s --config %s --out calib.yaml   # a still start, then turns\n"
+      "  mmlio run %s --config %s --calib calib.yaml --out out\n",
+      a.out.c_str(), a.out.c_str(), a.bag.c_str(), a.out.c_str(), a.bag.c_str(), a.out.c_str());
 }
 
 }  // namespace
 
 void registerInitCommand(CLI::App& app) {
   auto args = std::make_shared<InitArgs>();
-  CLI::App* cmd = app.add_subcommand("init", "A starter rig config from a bag: topics, LiDAR types, mode, what to check");
+  CLI::App* cmd =
+      app.add_subcommand("init", "A starter rig config from a bag: topics, LiDAR types, mode, what to check");
   cmd->add_option("bag", args->bag, "ROS 1 .bag, ROS 2 .mcap, rosbag2 folder or .db3 recorded on the rig")
       ->required()
       ->check(CLI::ExistingPath);

@@ -103,13 +103,14 @@ void run(const RunArgs& a) {
             << r.timing.table();
   if (r.report.evaluation) {
     const eval::EvalResult& e = *r.report.evaluation;
-    std::printf("\nagainst %s: ATE %.2f cm RMSE (max %.2f cm, attitude %.3f deg) over %zu poses and %.1f m of path "
-                "(report.json: evaluation)\n",
-                a.gt.c_str(), 100.0 * e.ate_rmse_m, 100.0 * e.ate_max_m, e.ate_rot_rmse_deg, e.num_associated,
-                e.path_length_m);
+    std::printf(
+        "\nagainst %s: ATE %.2f cm RMSE (max %.2f cm, attitude %.3f deg) over %zu poses and %.1f m of path "
+        "(report.json: evaluation)\n",
+        a.gt.c_str(), 100.0 * e.ate_rmse_m, 100.0 * e.ate_max_m, e.ate_rot_rmse_deg, e.num_associated, e.path_length_m);
   }
   if (!r.untrusted.empty()) {
-    std::cerr << "mmlio: outputs written but not trustworthy: " << r.untrusted << " (see " << a.out << "/report.json)\n";
+    std::cerr << "mmlio: outputs written but not trustworthy: " << r.untrusted << " (see " << a.out
+              << "/report.json)\n";
     std::exit(kExitUntrusted);
   }
 }
@@ -118,8 +119,11 @@ void run(const RunArgs& a) {
 
 void registerRunCommand(CLI::App& app) {
   auto args = std::make_shared<RunArgs>();
-  CLI::App* cmd = app.add_subcommand("run", "Odometry and mapping on a ROS 1 or ROS 2 bag: trajectory.tum, map.pcd, report.json");
-  cmd->add_option("bag", args->bag, "Input bag: ROS 1 .bag, ROS 2 .mcap, rosbag2 folder or .db3")->required()->check(CLI::ExistingPath);
+  CLI::App* cmd =
+      app.add_subcommand("run", "Odometry and mapping on a ROS 1 or ROS 2 bag: trajectory.tum, map.pcd, report.json");
+  cmd->add_option("bag", args->bag, "Input bag: ROS 1 .bag, ROS 2 .mcap, rosbag2 folder or .db3")
+      ->required()
+      ->check(CLI::ExistingPath);
   cmd->add_option("-c,--config", args->config, "Rig config YAML (default: built-in = config/hvi.yaml)")
       ->check(CLI::ExistingFile);
   cmd->add_option("-o,--out", args->out, "Output directory")->capture_default_str();

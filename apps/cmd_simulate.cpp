@@ -156,7 +156,8 @@ void runSimulate(const SimulateArgs& args) {
 void registerSimulateCommand(CLI::App& app) {
   auto args = std::make_shared<SimulateArgs>();
   CLI::App* cmd = app.add_subcommand("simulate", "Write a simulated sequence: bag, ground truth and true calibration");
-  cmd->add_option("--scenario", args->scenario, "office, corridor, corridor_blind, hall, stairs, ramp or lab")->required();
+  cmd->add_option("--scenario", args->scenario, "office, corridor, corridor_blind, hall, stairs, ramp or lab")
+      ->required();
   cmd->add_option("--out", args->out_dir, "Output directory (created): NAME.bag, NAME_gt.tum, NAME_truth.yaml")
       ->required();
   cmd->add_option("--duration", args->duration_s,

@@ -38,7 +38,8 @@ void BM_FeaturesVlp16RangeImage(benchmark::State& state) {
   LidarScan scan = synth::vlp16Room(synth::BoxRoom{}, 0.01);
   for (auto& p : scan.points) p.ring = 0;
   const lidar::FeatureConfig cfg;
-  for (auto _ : state) benchmark::DoNotOptimize(lidar::extractFeatures(scan, LidarKind::kSpinning, 1, cfg).edges.data());
+  for (auto _ : state)
+    benchmark::DoNotOptimize(lidar::extractFeatures(scan, LidarKind::kSpinning, 1, cfg).edges.data());
 }
 BENCHMARK(BM_FeaturesVlp16RangeImage)->Unit(benchmark::kMillisecond);
 
@@ -120,9 +121,12 @@ void BM_VoxelHashMapKnn(benchmark::State& state) {
   // Points on a set of walls and a floor: a map-like surface distribution.
   for (int i = 0; i < 1000 * state.range(2); ++i) {
     const int kind = i % 4;
-    if (kind == 0) pts.emplace_back(u(rng), u(rng), -1.5);
-    else if (kind == 1) pts.emplace_back(std::round(u(rng) / 5) * 5, u(rng), h(rng));
-    else pts.emplace_back(u(rng), std::round(u(rng) / 5) * 5, h(rng));
+    if (kind == 0)
+      pts.emplace_back(u(rng), u(rng), -1.5);
+    else if (kind == 1)
+      pts.emplace_back(std::round(u(rng) / 5) * 5, u(rng), h(rng));
+    else
+      pts.emplace_back(u(rng), std::round(u(rng) / 5) * 5, h(rng));
   }
   map::VoxelHashMap m(0.01 * static_cast<double>(state.range(0)), static_cast<int>(state.range(1)));
   m.add(pts);

@@ -11,8 +11,7 @@
 
 namespace mmlio::ros_node {
 
-template <class T, std::size_t NumClasses>
-class BoundedQueue {
+template <class T, std::size_t NumClasses> class BoundedQueue {
  public:
   /// capacity[c]: most items of class c waiting at once.
   explicit BoundedQueue(std::array<std::size_t, NumClasses> capacity) : capacity_(capacity) {}

@@ -86,8 +86,10 @@ NodeParams readParams(const ros::NodeHandle& pnh) {
 /// The config, with `calibration:` (or ~calib, which wins) applied, as `mmlio run` does.
 io::RigConfig loadConfig(const NodeParams& p) {
   io::RigConfig cfg;
-  if (p.config.empty()) log::info("no ~config: using the built-in defaults (same as config/hvi.yaml)");
-  else cfg = io::loadRigConfig(p.config);
+  if (p.config.empty())
+    log::info("no ~config: using the built-in defaults (same as config/hvi.yaml)");
+  else
+    cfg = io::loadRigConfig(p.config);
   const std::string source = p.calib.empty() ? cfg.calibration : p.calib;
   if (source == "auto") throw Error("calibration: auto is not available live; run `mmlio calibrate` and set ~calib");
   if (source != "config") {
@@ -106,7 +108,7 @@ struct Message {
   sensor_msgs::PointCloud2::ConstPtr cloud;
   boost::shared_ptr<const io::LivoxCustomMsg> livox;
   std::shared_ptr<std::promise<std::string>> save;  // resolves to "" (written) or the error
-  std::size_t lidar = 0;  // index into the active LiDARs
+  std::size_t lidar = 0;                            // index into the active LiDARs
 };
 enum QueueClass : std::size_t { kImuClass = 0, kScanClass = 1, kRequestClass = 2 };
 
@@ -125,7 +127,8 @@ class Node {
  public:
   Node(ros::NodeHandle& nh, ros::NodeHandle& pnh, NodeParams params, const io::RigConfig& cfg)
       : params_(std::move(params)),
-        queue_({static_cast<std::size_t>(params_.max_queued_imu), static_cast<std::size_t>(params_.max_queued_scans), 8}),
+        queue_(
+            {static_cast<std::size_t>(params_.max_queued_imu), static_cast<std::size_t>(params_.max_queued_scans), 8}),
         imu_gate_(cfg.imu.topic, cfg.imu.acc_unit),
         system_(cfg, params_.mode, [this](const estimator::SweepResult& r) { onSweep(r); }) {
     odometry_pub_ = pnh.advertise<nav_msgs::Odometry>("odometry", 100);
@@ -140,7 +143,10 @@ class Node {
     service_spinner_.start();
 
     subs_.push_back(nh.subscribe<sensor_msgs::Imu>(
-        cfg.imu.topic, 2000, [this](const sensor_msgs::Imu::ConstPtr& m) { enqueue(kImuClass, {m, {}, {}, {}, 0}); },
+        cfg.imu.topic, 2000,
+        [this](const sensor_msgs::Imu::ConstPtr& m) {
+          enqueue(kImuClass, {m, {}, {}, {}, 0});
+        },
         ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
     log::info("mode ", system_.mode(), ", IMU ", cfg.imu.topic, " (sensor_msgs/Imu, acc unit ", cfg.imu.acc_unit, ")");
     for (const io::LidarConfig* l : io::activeLidars(cfg, system_.mode())) subscribeLidar(nh, *l);
@@ -157,8 +163,8 @@ class Node {
   void finish() {
     queue_.close();
     if (worker_.joinable()) worker_.join();
-    log::info(system_.sweepsProcessed(), " sweeps, ", system_.odometryTrajectory().size(), " poses, ",
-              system_.loops(), " loops; dropped ", queue_.dropped(kImuClass), " IMU and ", queue_.dropped(kScanClass),
+    log::info(system_.sweepsProcessed(), " sweeps, ", system_.odometryTrajectory().size(), " poses, ", system_.loops(),
+              " loops; dropped ", queue_.dropped(kImuClass), " IMU and ", queue_.dropped(kScanClass),
               " LiDAR messages (queue full)");
     if (params_.out_dir.empty()) return;
     const std::string error = save();
@@ -195,7 +201,9 @@ class Node {
     } else {
       subs_.push_back(nh.subscribe<sensor_msgs::PointCloud2>(
           l.topic, 10,
-          [this, index](const sensor_msgs::PointCloud2::ConstPtr& m) { enqueue(kScanClass, {{}, m, {}, {}, index}); },
+          [this, index](const sensor_msgs::PointCloud2::ConstPtr& m) {
+            enqueue(kScanClass, {{}, m, {}, {}, index});
+          },
           ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
       log::info("LiDAR '", l.name, "' on ", l.topic, " (sensor_msgs/PointCloud2)");
     }
@@ -371,10 +379,18 @@ void routeLogToRosconsole() {
       return;
     }
     switch (level) {
-      case log::Level::kDebug: ROS_DEBUG_STREAM("mmlio_node: " << msg); break;
-      case log::Level::kInfo: ROS_INFO_STREAM("mmlio_node: " << msg); break;
-      case log::Level::kWarn: ROS_WARN_STREAM("mmlio_node: " << msg); break;
-      default: ROS_ERROR_STREAM("mmlio_node: " << msg); break;
+      case log::Level::kDebug:
+        ROS_DEBUG_STREAM("mmlio_node: " << msg);
+        break;
+      case log::Level::kInfo:
+        ROS_INFO_STREAM("mmlio_node: " << msg);
+        break;
+      case log::Level::kWarn:
+        ROS_WARN_STREAM("mmlio_node: " << msg);
+        break;
+      default:
+        ROS_ERROR_STREAM("mmlio_node: " << msg);
+        break;
     }
   });
 }

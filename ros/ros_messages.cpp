@@ -81,7 +81,8 @@ std::array<double, 36> poseCovariance(const estimator::Degeneracy& d, const Eige
   };
   const Eigen::Matrix3d R = q_world_body.toRotationMatrix();
   const Eigen::Matrix3d translation = block(d.translation_basis, d.translation_eigenvalues);  // world axes
-  const Eigen::Matrix3d rotation = R * block(d.rotation_basis, d.rotation_eigenvalues) * R.transpose();  // body -> world
+  const Eigen::Matrix3d rotation =
+      R * block(d.rotation_basis, d.rotation_eigenvalues) * R.transpose();  // body -> world
   std::array<double, 36> out{};
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) {
@@ -92,8 +93,9 @@ std::array<double, 36> poseCovariance(const estimator::Degeneracy& d, const Eige
 }
 
 nav_msgs::Odometry toOdometry(const NavState& state, const Eigen::Isometry3d& T_frame_body,
-                              const Eigen::Vector3d& angular_velocity_body, const std::array<double, 36>& pose_covariance,
-                              const std::string& frame_id, const std::string& child_frame_id) {
+                              const Eigen::Vector3d& angular_velocity_body,
+                              const std::array<double, 36>& pose_covariance, const std::string& frame_id,
+                              const std::string& child_frame_id) {
   nav_msgs::Odometry msg;
   msg.header.stamp = toRosTime(state.stamp_ns);
   msg.header.frame_id = frame_id;

@@ -39,8 +39,9 @@ std::array<double, 36> poseCovariance(const estimator::Degeneracy& d, const Eige
 /// nav_msgs/Odometry: pose of child_frame_id in frame_id, twist in child_frame_id (REP 105).
 /// Twist covariance is not estimated: its diagonal is -1.
 nav_msgs::Odometry toOdometry(const NavState& state, const Eigen::Isometry3d& T_frame_body,
-                              const Eigen::Vector3d& angular_velocity_body, const std::array<double, 36>& pose_covariance,
-                              const std::string& frame_id, const std::string& child_frame_id);
+                              const Eigen::Vector3d& angular_velocity_body,
+                              const std::array<double, 36>& pose_covariance, const std::string& frame_id,
+                              const std::string& child_frame_id);
 
 nav_msgs::Path toPath(const Trajectory& trajectory, const std::string& frame_id);
 

@@ -18,7 +18,7 @@ TEST(BoundedQueue, AFullClassDropsItsNewItemsButNotTheOtherClass) {
   EXPECT_TRUE(q.push(1, 100));
   EXPECT_FALSE(q.push(1, 101));  // scan class full
   for (int i = 0; i < 3; ++i) EXPECT_TRUE(q.push(0, i));
-  EXPECT_FALSE(q.push(0, 3));    // imu class full
+  EXPECT_FALSE(q.push(0, 3));  // imu class full
   EXPECT_EQ(q.dropped(0), 1u);
   EXPECT_EQ(q.dropped(1), 1u);
   EXPECT_EQ(q.size(), 4u);
@@ -156,12 +156,12 @@ TEST(RosMessages, CovarianceIsLargeAlongWhatTheLidarsDoNotObserve) {
   d.rotation_eigenvalues = {100.0, 100.0, 100.0};
   const Eigen::Quaterniond yaw(Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()));
   const auto c = poseCovariance(d, yaw, 0.02, 1e4);
-  EXPECT_DOUBLE_EQ(c[0], 1e4);                        // unobserved: capped
-  EXPECT_NEAR(c[7], 0.02 * 0.02 / 400.0, 1e-15);      // sigma^2 / eigenvalue
+  EXPECT_DOUBLE_EQ(c[0], 1e4);                    // unobserved: capped
+  EXPECT_NEAR(c[7], 0.02 * 0.02 / 400.0, 1e-15);  // sigma^2 / eigenvalue
   EXPECT_NEAR(c[14], 0.02 * 0.02 / 900.0, 1e-15);
-  EXPECT_NEAR(c[21], 0.02 * 0.02 / 100.0, 1e-15);     // isotropic rotation stays so in any frame
+  EXPECT_NEAR(c[21], 0.02 * 0.02 / 100.0, 1e-15);  // isotropic rotation stays so in any frame
   EXPECT_NEAR(c[1], 0.0, 1e-15);
-  EXPECT_NEAR(c[3], 0.0, 1e-15);                      // no translation-rotation coupling given
+  EXPECT_NEAR(c[3], 0.0, 1e-15);  // no translation-rotation coupling given
 }
 
 TEST(RosMessages, TransformAndPathCarryPosesInTheirFrames) {

@@ -90,7 +90,8 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
     const double clearly_degenerate = cfg_.prior_eigenvalue_fraction * cfg_.min_translation_eigenvalue;
     if (probe.converged && probe.min_translation_eigenvalue < clearly_degenerate) {
       v.icp = probe;
-      v.reason = "degenerate geometry at the prior (translation eigenvalue " + fmt(probe.min_translation_eigenvalue) + ")";
+      v.reason =
+          "degenerate geometry at the prior (translation eigenvalue " + fmt(probe.min_translation_eigenvalue) + ")";
       return v;
     }
   }
@@ -212,7 +213,8 @@ LoopResult LoopCloser::detect(const PoseGraph& graph, int query) const {
         best = i;
       }
     }
-    const bool already = std::any_of(candidates.begin(), candidates.end(), [&](const Candidate& c) { return c.index == best; });
+    const bool already =
+        std::any_of(candidates.begin(), candidates.end(), [&](const Candidate& c) { return c.index == best; });
     if (best >= 0 && !already && best_match.distance <= cfg_.max_descriptor_distance) {
       Eigen::Isometry3d prior = Eigen::Isometry3d::Identity();
       prior.linear() = Eigen::AngleAxisd(best_match.yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();

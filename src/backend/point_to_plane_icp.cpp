@@ -69,7 +69,8 @@ struct IcpTarget::Impl {
   }
 };
 
-IcpTarget::IcpTarget(std::vector<Eigen::Vector3d> points, int normal_neighbours, double min_patch_width_m) : impl_(std::make_unique<Impl>()) {
+IcpTarget::IcpTarget(std::vector<Eigen::Vector3d> points, int normal_neighbours, double min_patch_width_m)
+    : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.points = std::move(points);
   m.normal_neighbours = static_cast<std::size_t>(std::max(3, normal_neighbours));

@@ -27,8 +27,7 @@ Eigen::Isometry3d fromParams(const Params& x) {
 /// Right-perturbed pose manifold on {p, q(x,y,z,w)}: p <- p + dp, q <- q * Exp(dtheta)
 /// (the project's estimator convention), differentiated by Ceres.
 struct RightPosePlus {
-  template <typename T>
-  bool Plus(const T* x, const T* delta, T* x_plus_delta) const {
+  template <typename T> bool Plus(const T* x, const T* delta, T* x_plus_delta) const {
     for (int i = 0; i < 3; ++i) x_plus_delta[i] = x[i] + delta[i];
     const T theta_sq = delta[3] * delta[3] + delta[4] * delta[4] + delta[5] * delta[5];
     Eigen::Quaternion<T> dq;
@@ -47,8 +46,7 @@ struct RightPosePlus {
     out = (q * dq).normalized();
     return true;
   }
-  template <typename T>
-  bool Minus(const T* y, const T* x, T* y_minus_x) const {
+  template <typename T> bool Minus(const T* y, const T* x, T* y_minus_x) const {
     for (int i = 0; i < 3; ++i) y_minus_x[i] = y[i] - x[i];
     const Eigen::Map<const Eigen::Quaternion<T>> qx(x + 3), qy(y + 3);
     Eigen::Quaternion<T> d = qx.conjugate() * qy;
@@ -72,8 +70,7 @@ struct RelativePoseCost {
   RelativePoseCost(const Eigen::Isometry3d& T_a_b, const Matrix6d& sqrt_info)
       : p_ab(T_a_b.translation()), q_ab(Eigen::Quaterniond(T_a_b.rotation()).normalized()), S(sqrt_info) {}
 
-  template <typename T>
-  bool operator()(const T* a, const T* b, T* residual) const {
+  template <typename T> bool operator()(const T* a, const T* b, T* residual) const {
     const Eigen::Map<const Eigen::Matrix<T, 3, 1>> p_a(a), p_b(b);
     const Eigen::Map<const Eigen::Quaternion<T>> q_a(a + 3), q_b(b + 3);
     const Eigen::Quaternion<T> q_a_inv = q_a.conjugate();
@@ -101,8 +98,7 @@ struct TiltCost {
   TiltCost(const Eigen::Quaterniond& q_world_body_odom, double sigma_rad)
       : up_body(q_world_body_odom.conjugate() * Eigen::Vector3d::UnitZ()), inv_sigma(1.0 / sigma_rad) {}
 
-  template <typename T>
-  bool operator()(const T* x, T* residual) const {
+  template <typename T> bool operator()(const T* x, T* residual) const {
     const Eigen::Map<const Eigen::Quaternion<T>> q(x + 3);
     const Eigen::Matrix<T, 3, 1> up = q.conjugate() * Eigen::Matrix<T, 3, 1>::UnitZ();
     for (int i = 0; i < 3; ++i) residual[i] = T(inv_sigma) * (up[i] - T(up_body[i]));
@@ -119,7 +115,8 @@ struct TiltCost {
 
 Matrix6d sqrtInformation(const Matrix6d& information) {
   const Eigen::LLT<Matrix6d> llt(information);
-  if (llt.info() != Eigen::Success) throw std::invalid_argument("PoseGraph: information matrix is not positive definite");
+  if (llt.info() != Eigen::Success)
+    throw std::invalid_argument("PoseGraph: information matrix is not positive definite");
   return llt.matrixL().transpose();
 }
 
@@ -144,9 +141,9 @@ int PoseGraph::addKeyframe(KeyframeNode node) {
   } else {
     const Eigen::Isometry3d T_prev_cur = nodes_.back().T_world_body_odom.inverse() * node.T_world_body_odom;
     params_.push_back(toParams(pose(index - 1) * T_prev_cur));
-    odom_edges_.push_back(Edge{index - 1, index, T_prev_cur,
-                               sqrtInformation(isotropicInformation(cfg_.odom_sigma_translation_m,
-                                                                    cfg_.odom_sigma_rotation_rad))});
+    odom_edges_.push_back(
+        Edge{index - 1, index, T_prev_cur,
+             sqrtInformation(isotropicInformation(cfg_.odom_sigma_translation_m, cfg_.odom_sigma_rotation_rad))});
   }
   nodes_.push_back(std::move(node));
   return index;
@@ -165,11 +162,12 @@ bool PoseGraph::optimize() {
   ceres::Problem problem;
   for (auto& p : x) problem.AddParameterBlock(p.data(), 7, new ceres::AutoDiffManifold<RightPosePlus, 7, 6>());
   for (const Edge& e : odom_edges_)
-    problem.AddResidualBlock(RelativePoseCost::Create(e.T_from_to, e.sqrt_information), nullptr,
-                             x[e.from].data(), x[e.to].data());
+    problem.AddResidualBlock(RelativePoseCost::Create(e.T_from_to, e.sqrt_information), nullptr, x[e.from].data(),
+                             x[e.to].data());
   for (const Edge& e : loops_)
     problem.AddResidualBlock(RelativePoseCost::Create(e.T_from_to, e.sqrt_information),
-                             cfg_.loop_huber > 0 ? new ceres::HuberLoss(cfg_.loop_huber) : nullptr, x[e.from].data(), x[e.to].data());
+                             cfg_.loop_huber > 0 ? new ceres::HuberLoss(cfg_.loop_huber) : nullptr, x[e.from].data(),
+                             x[e.to].data());
   if (cfg_.tilt_sigma_rad > 0.0)
     for (std::size_t i = 1; i < nodes_.size(); ++i)
       problem.AddResidualBlock(
@@ -188,8 +186,8 @@ bool PoseGraph::optimize() {
   options.num_threads = 1;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
-  log::debug("pose graph: ", nodes_.size(), " keyframes, ", loops_.size(), " loops, cost ",
-             summary.initial_cost, " -> ", summary.final_cost, " in ", summary.iterations.size(), " iterations");
+  log::debug("pose graph: ", nodes_.size(), " keyframes, ", loops_.size(), " loops, cost ", summary.initial_cost,
+             " -> ", summary.final_cost, " in ", summary.iterations.size(), " iterations");
   if (!summary.IsSolutionUsable()) {
     log::warn("pose graph optimisation failed: ", summary.message);
     return false;
@@ -212,8 +210,8 @@ Eigen::Isometry3d PoseGraph::pose(int i) const { return fromParams(params_.at(st
 
 Eigen::Isometry3d PoseGraph::correct(Stamp t, const Eigen::Isometry3d& T_world_body_odom) const {
   // Last keyframe with stamp <= t.
-  const auto it = std::upper_bound(nodes_.begin(), nodes_.end(), t,
-                                   [](Stamp s, const KeyframeNode& n) { return s < n.stamp_ns; });
+  const auto it =
+      std::upper_bound(nodes_.begin(), nodes_.end(), t, [](Stamp s, const KeyframeNode& n) { return s < n.stamp_ns; });
   if (it == nodes_.begin()) return T_world_body_odom;
   const int k = static_cast<int>(std::distance(nodes_.begin(), it)) - 1;
   return pose(k) * nodes_[k].T_world_body_odom.inverse() * T_world_body_odom;

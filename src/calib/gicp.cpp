@@ -26,30 +26,31 @@ double geometric(double a, double b, int level, int levels) {
   return a * std::pow(b / a, static_cast<double>(level) / (levels - 1));
 }
 
-std::vector<Eigen::Matrix3d> covariancesWithTree(const std::vector<Eigen::Vector3d>& points, const KdTree& tree, int k_in,
-                                                 double eps) {
+std::vector<Eigen::Matrix3d> covariancesWithTree(const std::vector<Eigen::Vector3d>& points, const KdTree& tree,
+                                                 int k_in, double eps) {
   std::vector<Eigen::Matrix3d> covs(points.size(), Eigen::Matrix3d::Identity() * eps);
   const std::size_t k = static_cast<std::size_t>(std::max(3, k_in));
   if (points.size() < k) return covs;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
-    std::vector<std::uint32_t> idx(k);
-    std::vector<double> d2(k);
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      const std::size_t n = tree.knnSearch(points[i].data(), k, idx.data(), d2.data());
-      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      for (std::size_t j = 0; j < n; ++j) mean += points[idx[j]];
-      mean /= static_cast<double>(n);
-      Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
-      for (std::size_t j = 0; j < n; ++j) {
-        const Eigen::Vector3d d = points[idx[j]] - mean;
-        c += d * d.transpose();
-      }
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(c);
-      // Segal et al.: keep the directions, replace the spread by a unit disc of thickness eps.
-      const Eigen::Vector3d values(eps, 1.0, 1.0);
-      covs[i] = es.eigenvectors() * values.asDiagonal() * es.eigenvectors().transpose();
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 256),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      std::vector<std::uint32_t> idx(k);
+                      std::vector<double> d2(k);
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                        const std::size_t n = tree.knnSearch(points[i].data(), k, idx.data(), d2.data());
+                        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+                        for (std::size_t j = 0; j < n; ++j) mean += points[idx[j]];
+                        mean /= static_cast<double>(n);
+                        Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
+                        for (std::size_t j = 0; j < n; ++j) {
+                          const Eigen::Vector3d d = points[idx[j]] - mean;
+                          c += d * d.transpose();
+                        }
+                        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(c);
+                        // Segal et al.: keep the directions, replace the spread by a unit disc of thickness eps.
+                        const Eigen::Vector3d values(eps, 1.0, 1.0);
+                        covs[i] = es.eigenvectors() * values.asDiagonal() * es.eigenvectors().transpose();
+                      }
+                    });
   return covs;
 }
 
@@ -90,28 +91,29 @@ GicpResult gicp(const std::vector<Eigen::Vector3d>& source, const std::vector<Ei
   auto linearise = [&](double gate_m, Matrix6d* H, Vector6d* g, int* n_inliers, double* dist_sum) {
     const double gate_sq = gate_m * gate_m;
     const Eigen::Matrix3d R = T.linear();
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, source.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-        const Eigen::Vector3d x = T * source[i];
-        std::uint32_t j = 0;
-        double d2 = 0;
-        target_tree.knnSearch(x.data(), 1, &j, &d2);
-        if (d2 > gate_sq) {
-          match[i] = -1;
-          continue;
-        }
-        match[i] = static_cast<int>(j);
-        dist[i] = std::sqrt(d2);
-        const Eigen::Matrix3d C = target_covs[j] + R * source_covs[i] * R.transpose();
-        const Eigen::Matrix3d W = C.inverse();
-        const Eigen::Vector3d res = target[j] - x;
-        Eigen::Matrix<double, 3, 6> J;
-        J.leftCols<3>() = -Eigen::Matrix3d::Identity();
-        J.rightCols<3>() = so3::hat(x);
-        Hs[i].noalias() = J.transpose() * W * J;
-        gs[i].noalias() = J.transpose() * W * res;
-      }
-    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, source.size(), 256),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                          const Eigen::Vector3d x = T * source[i];
+                          std::uint32_t j = 0;
+                          double d2 = 0;
+                          target_tree.knnSearch(x.data(), 1, &j, &d2);
+                          if (d2 > gate_sq) {
+                            match[i] = -1;
+                            continue;
+                          }
+                          match[i] = static_cast<int>(j);
+                          dist[i] = std::sqrt(d2);
+                          const Eigen::Matrix3d C = target_covs[j] + R * source_covs[i] * R.transpose();
+                          const Eigen::Matrix3d W = C.inverse();
+                          const Eigen::Vector3d res = target[j] - x;
+                          Eigen::Matrix<double, 3, 6> J;
+                          J.leftCols<3>() = -Eigen::Matrix3d::Identity();
+                          J.rightCols<3>() = so3::hat(x);
+                          Hs[i].noalias() = J.transpose() * W * J;
+                          gs[i].noalias() = J.transpose() * W * res;
+                        }
+                      });
     H->setZero();
     g->setZero();
     *n_inliers = 0;
@@ -139,9 +141,8 @@ GicpResult gicp(const std::vector<Eigen::Vector3d>& source, const std::vector<Ei
       ++result.iterations;
       if (n < cfg.min_correspondences) return result;
       // Levenberg-style damping keeps a near-degenerate system (few planes) from jumping.
-      const Vector6d delta = (H + 1e-6 * H.diagonal().asDiagonal().toDenseMatrix() + 1e-9 * Matrix6d::Identity())
-                                 .ldlt()
-                                 .solve(-g);
+      const Vector6d delta =
+          (H + 1e-6 * H.diagonal().asDiagonal().toDenseMatrix() + 1e-9 * Matrix6d::Identity()).ldlt().solve(-g);
       Eigen::Isometry3d dT = Eigen::Isometry3d::Identity();
       dT.linear() = so3::exp(delta.tail<3>()).toRotationMatrix();
       dT.translation() = delta.head<3>();

@@ -75,7 +75,8 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
   };
   const auto better = [](const Attempt& a, const Attempt& b) {  // more matched points, then tighter
     if (a.gicp.converged != b.gicp.converged) return a.gicp.converged;
-    const double sa = a.gicp.overlap / std::max(a.gicp.fitness_m, 1e-4), sb = b.gicp.overlap / std::max(b.gicp.fitness_m, 1e-4);
+    const double sa = a.gicp.overlap / std::max(a.gicp.fitness_m, 1e-4),
+                 sb = b.gicp.overlap / std::max(b.gicp.fitness_m, 1e-4);
     return sa > sb;
   };
 
@@ -83,8 +84,8 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
   if (guess) {
     best = attempt(*guess);
   }
-  const bool guess_good = guess && best.gicp.converged && best.gicp.fitness_m <= cfg.max_fitness_m &&
-                          best.gicp.overlap >= cfg.min_overlap;
+  const bool guess_good =
+      guess && best.gicp.converged && best.gicp.fitness_m <= cfg.max_fitness_m && best.gicp.overlap >= cfg.min_overlap;
   if (!guess_good) {
     res.yaw_searched = true;
     const Eigen::Vector3d t0 = guess ? Eigen::Vector3d(guess->translation()) : Eigen::Vector3d::Zero();
@@ -116,13 +117,14 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
     return res;
   }
   if (!g.converged) {
-    res.message = "GICP did not converge (" + std::to_string(g.inliers) + " correspondences): give a rough "
+    res.message = "GICP did not converge (" + std::to_string(g.inliers) +
+                  " correspondences): give a rough "
                   "T_imu_sensor for the spinning LiDAR in the config, or start the bag facing a structured scene";
     return res;
   }
   if (g.fitness_m > cfg.max_fitness_m || g.overlap < cfg.min_overlap) {
-    res.message = "GICP fitness " + fmt(g.fitness_m) + " m, overlap " + fmt(g.overlap) + " (need <= " +
-                  fmt(cfg.max_fitness_m) + " m, >= " + fmt(cfg.min_overlap) +
+    res.message = "GICP fitness " + fmt(g.fitness_m) + " m, overlap " + fmt(g.overlap) +
+                  " (need <= " + fmt(cfg.max_fitness_m) + " m, >= " + fmt(cfg.min_overlap) +
                   "): the clouds do not agree; check that the rig stood still and both LiDARs see the same scene";
     return res;
   }
@@ -138,9 +140,8 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
   }
   res.ok = true;
   res.message = "GICP fitness " + fmt(g.fitness_m) + " m, overlap " + fmt(g.overlap) + ", conditioning " +
-                fmt(conditioning) + " on " +
-                std::to_string(best.source_points) + " spinning / " + std::to_string(solid.size()) +
-                " solid-state points" + (res.yaw_searched ? " (yaw search)" : "");
+                fmt(conditioning) + " on " + std::to_string(best.source_points) + " spinning / " +
+                std::to_string(solid.size()) + " solid-state points" + (res.yaw_searched ? " (yaw search)" : "");
   return res;
 }
 

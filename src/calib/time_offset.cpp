@@ -84,14 +84,15 @@ std::vector<SensorRotation> sweepRotations(const std::vector<LidarScan>& sweeps,
   for (std::size_t k = 0; k + 1 < sweeps.size(); ++k) {
     LidarScan next = prepared(sweeps[k + 1]);
     // Sweeps that are not consecutive (a gap in a selection) make no pair.
-    const bool pair = !current.points.empty() && !next.points.empty() &&
-                      toSec(sweeps[k + 1].start_ns - sweeps[k].start_ns) <= 0.15;
+    const bool pair =
+        !current.points.empty() && !next.points.empty() && toSec(sweeps[k + 1].start_ns - sweeps[k].start_ns) <= 0.15;
     if (pair) {
       const backend::IcpTarget target(map::voxelCentroids(toVec(current), icp.voxel_fine_m));
       const backend::IcpResult r = backend::alignPointToPlane(toVec(next), target, prior, icp);
       if (r.converged) {
         prior = r.T_target_source;  // the next pair moves about the same
-        out.push_back({stamp(current), stamp(next), so3::log(Eigen::Quaterniond(r.T_target_source.rotation()).normalized()),
+        out.push_back({stamp(current), stamp(next),
+                       so3::log(Eigen::Quaterniond(r.T_target_source.rotation()).normalized()),
                        r.T_target_source.translation()});
       } else {
         prior = Eigen::Isometry3d::Identity();
@@ -123,7 +124,8 @@ TimeOffsetResult estimateTimeOffset(const std::vector<SensorRotation>& rotations
     char rate[32];
     std::snprintf(rate, sizeof(rate), "%.2g", cfg.min_rate_rad_s);
     res.message = "only " + std::to_string(moving.size()) + " sweep pairs turn faster than " + rate + " rad/s (need " +
-                  std::to_string(cfg.min_increments) + "): record a few turns after the stationary start to calibrate "
+                  std::to_string(cfg.min_increments) +
+                  "): record a few turns after the stationary start to calibrate "
                   "the clock offset";
     return res;
   }

@@ -29,8 +29,8 @@ Eigen::Matrix3d schurBlock(const Matrix6d& H, int keep) {
 
 }  // namespace
 
-Matrix6d matchInformation(const std::vector<MapMatch>& matches, const Eigen::Isometry3d& T_world_body,
-                          double inlier_m, int source) {
+Matrix6d matchInformation(const std::vector<MapMatch>& matches, const Eigen::Isometry3d& T_world_body, double inlier_m,
+                          int source) {
   Matrix6d H = Matrix6d::Zero();
   const Eigen::Matrix3d R = T_world_body.linear();
   for (const MapMatch& m : matches) {

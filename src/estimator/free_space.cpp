@@ -48,9 +48,10 @@ std::vector<std::uint8_t> FreeSpaceMemory::movedIn(const std::vector<Eigen::Vect
       }
     return free;
   };
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i) flags[i] = moved(points[i]) ? 1 : 0;
-  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 256),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i < r.end(); ++i) flags[i] = moved(points[i]) ? 1 : 0;
+                    });
   return flags;
 }
 

@@ -102,7 +102,8 @@ bool ImuFactor::Evaluate(double const* const* parameters, double* residuals, dou
     j.block<3, 3>(kP, 0) = -Ri_inv * T;
     j.block<3, 3>(kP, 3) = -dp_dba;
     j.block<3, 3>(kP, 6) = -dp_dbg;
-    j.block<3, 3>(kR, 6) = rotationResidualByGyroBias(pre_->deltaQ(), Qi.inverse() * Qj, dq_dbg * (Bgi - bg_lin)) * dq_dbg;
+    j.block<3, 3>(kR, 6) =
+        rotationResidualByGyroBias(pre_->deltaQ(), Qi.inverse() * Qj, dq_dbg * (Bgi - bg_lin)) * dq_dbg;
     j.block<3, 3>(kV, 0) = -Ri_inv;
     j.block<3, 3>(kV, 3) = -dv_dba;
     j.block<3, 3>(kV, 6) = -dv_dbg;

@@ -6,12 +6,11 @@
 
 namespace mmlio::estimator {
 
-PointToPlaneFactor::PointToPlaneFactor(const Eigen::Vector3d& p_body, const Eigen::Vector3d& normal_world,
-                                       double d, double weight)
+PointToPlaneFactor::PointToPlaneFactor(const Eigen::Vector3d& p_body, const Eigen::Vector3d& normal_world, double d,
+                                       double weight)
     : p_body_(p_body), normal_world_(normal_world), d_(d), weight_(weight) {}
 
-bool PointToPlaneFactor::Evaluate(double const* const* parameters, double* residuals,
-                                  double** jacobians) const {
+bool PointToPlaneFactor::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
   const Eigen::Map<const Eigen::Vector3d> t(parameters[0]);
   const Eigen::Quaterniond q = Eigen::Map<const Eigen::Quaterniond>(parameters[0] + 3).normalized();
   const Eigen::Matrix3d R = q.toRotationMatrix();
@@ -33,8 +32,7 @@ PointToEdgeFactor::PointToEdgeFactor(const Eigen::Vector3d& p_body, const Eigen:
   perp_projector_ = Eigen::Matrix3d::Identity() - u * u.transpose();
 }
 
-bool PointToEdgeFactor::Evaluate(double const* const* parameters, double* residuals,
-                                 double** jacobians) const {
+bool PointToEdgeFactor::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
   const Eigen::Map<const Eigen::Vector3d> t(parameters[0]);
   const Eigen::Quaterniond q = Eigen::Map<const Eigen::Quaterniond>(parameters[0] + 3).normalized();
   const Eigen::Matrix3d R = q.toRotationMatrix();

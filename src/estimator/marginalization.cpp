@@ -151,8 +151,8 @@ void MarginalizationInfo::marginalize() {
   Eigen::VectorXd g_prior = g.tail(n);
   if (m > 0) {
     const auto eig = symmetricEigen(H.topLeftCorner(m, m));
-    const Eigen::VectorXd inv = (eig.eigenvalues().array() > eigenvalue_floor_)
-                                    .select(eig.eigenvalues().array().inverse(), 0.0);
+    const Eigen::VectorXd inv =
+        (eig.eigenvalues().array() > eigenvalue_floor_).select(eig.eigenvalues().array().inverse(), 0.0);
     const Eigen::MatrixXd H_mm_inv = eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
     const Eigen::MatrixXd H_rm = H.bottomLeftCorner(n, m);
     H_prior -= H_rm * H_mm_inv * H_rm.transpose();

@@ -404,9 +404,8 @@ struct Odometry::Impl {
       st.translation_points = d.translation_points;
       (*rejected)[s] = edge_poor[s] && d.translation_degenerate;
     }
-    const bool others_matched = std::any_of(matches.begin(), matches.end(), [&](const MapMatch& m) {
-      return !(*rejected)[m.source];
-    });
+    const bool others_matched =
+        std::any_of(matches.begin(), matches.end(), [&](const MapMatch& m) { return !(*rejected)[m.source]; });
     if (!others_matched) std::fill(rejected->begin(), rejected->end(), 0);
     for (LidarFrameStats& st : out->lidars) {
       const std::size_t s = indexOf(st.sensor);
@@ -550,7 +549,8 @@ Odometry::~Odometry() = default;
 void Odometry::addImu(const ImuSample& sample) {
   auto& d = *impl_;
   if (!d.imu.empty() && sample.stamp_ns <= d.imu.back().stamp_ns) {
-    log::emit(log::Level::kWarn, "IMU sample out of order or duplicated at ", log::stampText(sample.stamp_ns), " s: dropped");
+    log::emit(log::Level::kWarn, "IMU sample out of order or duplicated at ", log::stampText(sample.stamp_ns),
+              " s: dropped");
     return;
   }
   d.imu.push_back(sample);
@@ -675,7 +675,8 @@ SweepResult Odometry::process(lidar::AlignedSweep sweep) {
     out.correspondences = imu_ok
                               ? d.registerSweep(matched, pre, prev, prev_velocity_guessed, &state, &out)
                               : d.registerAcrossGap(matched, prev, prev_velocity_guessed, unobserved_s, &state, &out);
-    if (out.registered && out.correspondences >= kMinCorrespondences) d.drift.update(out.degeneracy, d.cfg.lidar_sigma_m);
+    if (out.registered && out.correspondences >= kMinCorrespondences)
+      d.drift.update(out.degeneracy, d.cfg.lidar_sigma_m);
     out.drift_sigma_m = d.drift.largestSigmaM();
     if (out.correspondences < kMinCorrespondences) {
       tracked = false;

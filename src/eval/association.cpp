@@ -37,8 +37,8 @@ std::vector<AssociatedPose> associate(const Trajectory& gt_in, const Trajectory&
     const Stamp t = pose.stamp_ns;
     if (t < gt.front().stamp_ns || t > gt.back().stamp_ns) continue;
     // First GT sample with stamp >= t; it exists because t <= gt.back().stamp_ns.
-    auto upper = std::lower_bound(gt.begin(), gt.end(), t,
-                                  [](const StampedPose& p, Stamp s) { return p.stamp_ns < s; });
+    auto upper =
+        std::lower_bound(gt.begin(), gt.end(), t, [](const StampedPose& p, Stamp s) { return p.stamp_ns < s; });
     const StampedPose& b = *upper;
     const StampedPose& a = upper == gt.begin() ? *upper : *(upper - 1);
     const Stamp nearest_ns = std::min(t - a.stamp_ns, b.stamp_ns - t);

@@ -65,8 +65,10 @@ void Canvas::line(double x0, double y0, double x1, double y1, Rgb color, double 
         continue;
       }
       const double t = q[k] / p[k];
-      if (p[k] < 0.0) t0 = std::max(t0, t);
-      else t1 = std::min(t1, t);
+      if (p[k] < 0.0)
+        t0 = std::max(t0, t);
+      else
+        t1 = std::min(t1, t);
     }
     if (t0 > t1) return;
     const double nx0 = x0 + t0 * dx, ny0 = y0 + t0 * dy;
@@ -79,8 +81,10 @@ void Canvas::line(double x0, double y0, double x1, double y1, Rgb color, double 
   for (int i = 0; i <= steps; ++i) {
     const double u = static_cast<double>(i) / steps;
     const double x = x0 + u * (x1 - x0), y = y0 + u * (y1 - y0);
-    if (width_px <= 1.5) setPixel(static_cast<int>(std::lround(x)), static_cast<int>(std::lround(y)), color);
-    else circle(x, y, 0.5 * width_px, color, true);
+    if (width_px <= 1.5)
+      setPixel(static_cast<int>(std::lround(x)), static_cast<int>(std::lround(y)), color);
+    else
+      circle(x, y, 0.5 * width_px, color, true);
   }
 }
 

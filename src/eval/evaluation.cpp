@@ -49,9 +49,7 @@ void appendNumber(std::ostringstream& os, const char* key, double value, bool fi
   os << text;
 }
 
-void appendCount(std::ostringstream& os, const char* key, size_t value) {
-  os << ",\"" << key << "\":" << value;
-}
+void appendCount(std::ostringstream& os, const char* key, size_t value) { os << ",\"" << key << "\":" << value; }
 
 }  // namespace
 
@@ -110,12 +108,14 @@ EvalResult evaluate(const Trajectory& gt, const Trajectory& est, const EvalOptio
   std::vector<Eigen::Vector3d> gt_tips, est_tips;
   for (size_t i = 0; i < pairs.size(); ++i) {
     for (int a = -1; a < 3; ++a) {
-      const Eigen::Vector3d u = a < 0 ? Eigen::Vector3d(Eigen::Vector3d::Zero()) : Eigen::Vector3d(Eigen::Vector3d::Unit(a));
+      const Eigen::Vector3d u =
+          a < 0 ? Eigen::Vector3d(Eigen::Vector3d::Zero()) : Eigen::Vector3d(Eigen::Vector3d::Unit(a));
       gt_tips.push_back(pairs[i].T_world_gt * u);
       est_tips.push_back(pairs[i].T_world_est * u);
     }
   }
-  result.T_gt_est_pose = options.align ? alignUmeyama(gt_tips, est_tips, false).T_gt_est : Eigen::Isometry3d::Identity();
+  result.T_gt_est_pose =
+      options.align ? alignUmeyama(gt_tips, est_tips, false).T_gt_est : Eigen::Isometry3d::Identity();
   double rot_sq = 0.0;
   for (size_t i = 0; i < pairs.size(); ++i) {
     const Eigen::Matrix3d R_est = result.T_gt_est_pose.linear() * pairs[i].T_world_est.linear();

@@ -67,8 +67,7 @@ void Plot2D::addLine(std::vector<Eigen::Vector2d> xy, Rgb color, double width_px
   series_.push_back({Kind::kLine, std::move(xy), {color}, width_px, std::move(label)});
 }
 
-void Plot2D::addScatter(std::vector<Eigen::Vector2d> xy, std::vector<Rgb> colors, double radius_px,
-                        std::string label) {
+void Plot2D::addScatter(std::vector<Eigen::Vector2d> xy, std::vector<Rgb> colors, double radius_px, std::string label) {
   if (colors.size() != xy.size()) colors.resize(xy.size(), colors.empty() ? colors::kBlack : colors.front());
   series_.push_back({Kind::kScatter, std::move(xy), std::move(colors), radius_px, std::move(label)});
 }
@@ -125,7 +124,8 @@ void Plot2D::draw(Canvas& canvas, int x, int y, int width, int height) const {
     }
     y_ticks = niceTicks(yr.lo, yr.hi, std::max(2, plot_h / (5 * th)));
   }
-  const std::vector<double> x_ticks = niceTicks(xr.lo, xr.hi, std::max(2, plot_w / (Canvas::textWidth("-000.0", s) * 2)));
+  const std::vector<double> x_ticks =
+      niceTicks(xr.lo, xr.hi, std::max(2, plot_w / (Canvas::textWidth("-000.0", s) * 2)));
   const double x_step = x_ticks.size() > 1 ? x_ticks[1] - x_ticks[0] : xr.span();
   const double y_step = y_ticks.size() > 1 ? y_ticks[1] - y_ticks[0] : yr.span();
 
@@ -173,7 +173,8 @@ void Plot2D::draw(Canvas& canvas, int x, int y, int width, int height) const {
         for (size_t i = 0; i < series.xy.size(); ++i) {
           const Eigen::Vector2d p = to_px(series.xy[i]);
           if (series.size_px <= 0.5)
-            canvas.setPixel(static_cast<int>(std::lround(p.x())), static_cast<int>(std::lround(p.y())), series.colors[i]);
+            canvas.setPixel(static_cast<int>(std::lround(p.x())), static_cast<int>(std::lround(p.y())),
+                            series.colors[i]);
           else
             canvas.circle(p.x(), p.y(), series.size_px, series.colors[i]);
         }

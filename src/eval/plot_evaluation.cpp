@@ -29,7 +29,8 @@ Plot2D topViewPlot(const std::vector<Eigen::Vector3d>& gt_xyz, const std::vector
   Plot2D plot(config);
   plot.addLine(topView(gt_xyz), colors::kGroundTruth, 3.0, "ground truth");
   plot.addLine(topView(est_xyz), colors::kEstimate, 2.0, "estimate");
-  if (!gt_xyz.empty()) plot.addMarker(Eigen::Vector2d(gt_xyz.front().x(), gt_xyz.front().y()), colors::kGreen, 5.0, "start");
+  if (!gt_xyz.empty())
+    plot.addMarker(Eigen::Vector2d(gt_xyz.front().x(), gt_xyz.front().y()), colors::kGreen, 5.0, "start");
   return plot;
 }
 
@@ -52,8 +53,7 @@ void plotTrajectories(const std::string& png_path, const std::vector<Eigen::Vect
 Canvas renderEvaluation(const EvalResult& r) {
   Canvas canvas(kWidthPx, kTopViewHeightPx + kErrorHeightPx);
   const std::string top_title = "Top view  -  ATE RMSE " + format("%.3f", r.ate_rmse_m) + " m,  RPE " +
-                                format("%.2f", r.rpe_10m_pct) + " % " + format("%.4f", r.rpe_10m_deg_per_m) +
-                                " deg/m";
+                                format("%.2f", r.rpe_10m_pct) + " % " + format("%.4f", r.rpe_10m_deg_per_m) + " deg/m";
   topViewPlot(r.gt_xyz, r.est_xyz_aligned, top_title).draw(canvas, 0, 0, kWidthPx, kTopViewHeightPx);
 
   Plot2D::Config config;
@@ -65,7 +65,8 @@ Canvas renderEvaluation(const EvalResult& r) {
   Plot2D errors(config);
   std::vector<Eigen::Vector2d> series;
   series.reserve(r.times_s.size());
-  for (size_t i = 0; i < r.times_s.size() && i < r.errors_m.size(); ++i) series.emplace_back(r.times_s[i], r.errors_m[i]);
+  for (size_t i = 0; i < r.times_s.size() && i < r.errors_m.size(); ++i)
+    series.emplace_back(r.times_s[i], r.errors_m[i]);
   double t_lo = 0.0, t_hi = 1.0, e_hi = 0.0;
   if (!series.empty()) {
     t_lo = series.front().x();

@@ -26,8 +26,8 @@ RelativeError relativePoseError(const std::vector<Eigen::Isometry3d>& gt, const 
   size_t count = 0;
   for (size_t i = 0; i < gt.size(); ++i) {
     // Cumulative length is non-decreasing, so the segment end is a binary search.
-    const auto end = std::lower_bound(length.begin() + static_cast<std::ptrdiff_t>(i), length.end(),
-                                      length[i] + segment_m);
+    const auto end =
+        std::lower_bound(length.begin() + static_cast<std::ptrdiff_t>(i), length.end(), length[i] + segment_m);
     if (end == length.end()) break;  // later starts cannot reach the length either
     const size_t j = static_cast<size_t>(end - length.begin());
     const double travelled_m = length[j] - length[i];

@@ -20,7 +20,8 @@ ImuSample interpolate(const ImuSample& a, const ImuSample& b, Stamp t) {
 void step(NavState& x, const ImuSample& m0, const ImuSample& m1, double dt, const Eigen::Vector3d& g) {
   const Eigen::Vector3d w = 0.5 * (m0.gyro_rad_s + m1.gyro_rad_s) - x.bias.gyro_rad_s;
   const Eigen::Quaterniond q1 = (x.q_world_body * so3::exp(w * dt)).normalized();
-  const Eigen::Vector3d a = 0.5 * (x.q_world_body * (m0.acc_m_s2 - x.bias.acc_m_s2) + q1 * (m1.acc_m_s2 - x.bias.acc_m_s2)) + g;
+  const Eigen::Vector3d a =
+      0.5 * (x.q_world_body * (m0.acc_m_s2 - x.bias.acc_m_s2) + q1 * (m1.acc_m_s2 - x.bias.acc_m_s2)) + g;
   x.p_world += x.v_world * dt + 0.5 * a * dt * dt;
   x.v_world += a * dt;
   x.q_world_body = q1;

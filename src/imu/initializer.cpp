@@ -114,7 +114,8 @@ ImuInitResult ImuInitializer::result() const {
   const double roll_deg = std::atan2(Rw(2, 1), Rw(2, 2)) * 180.0 / M_PI;
   const double pitch_deg = -std::asin(std::clamp(Rw(2, 0), -1.0, 1.0)) * 180.0 / M_PI;
   const std::string prefix = still ? "" : "rig never still (" + not_still + "), forced: ";
-  std::snprintf(buf, sizeof(buf), "%s|g|=%.3f m/s^2 (acc scale %.5f), gyro bias (%.4f %.4f %.4f) rad/s, roll %.2f pitch %.2f deg",
+  std::snprintf(buf, sizeof(buf),
+                "%s|g|=%.3f m/s^2 (acc scale %.5f), gyro bias (%.4f %.4f %.4f) rad/s, roll %.2f pitch %.2f deg",
                 prefix.c_str(), r.gravity_norm_m_s2, r.acc_scale, r.gyro_bias.x(), r.gyro_bias.y(), r.gyro_bias.z(),
                 roll_deg, pitch_deg);
   r.message = buf;

@@ -44,8 +44,8 @@ void Preintegration::integrate(double dt_s, const Vector3d& acc0, const Vector3d
 
 void Preintegration::integrate(const std::vector<ImuSample>& samples) {
   for (std::size_t i = 1; i < samples.size(); ++i) {
-    integrate(toSec(samples[i].stamp_ns - samples[i - 1].stamp_ns), samples[i - 1].acc_m_s2,
-              samples[i - 1].gyro_rad_s, samples[i].acc_m_s2, samples[i].gyro_rad_s);
+    integrate(toSec(samples[i].stamp_ns - samples[i - 1].stamp_ns), samples[i - 1].acc_m_s2, samples[i - 1].gyro_rad_s,
+              samples[i].acc_m_s2, samples[i].gyro_rad_s);
   }
 }
 
@@ -72,7 +72,7 @@ void Preintegration::step(const Interval& m) {
   const Matrix3d I = Matrix3d::Identity();
   const Matrix3d A0x = so3::hat(a0), A1x = so3::hat(a1);
   const Matrix3d step_T = so3::exp(w * dt).toRotationMatrix().transpose();  // Exp(w dt)^T
-  const Matrix3d Jr_dt = so3::rightJacobian(w * dt) * dt;                  // d(angle)/d(-bg)
+  const Matrix3d Jr_dt = so3::rightJacobian(w * dt) * dt;                   // d(angle)/d(-bg)
   const double dt2 = dt * dt;
   Eigen::Matrix<double, 15, 15> F = Eigen::Matrix<double, 15, 15>::Zero();
   F.block<3, 3>(0, 0) = I;

@@ -26,7 +26,9 @@ namespace {
 constexpr int kSampledMessages = 50;
 
 // Frame names as tf2 spells them: without a leading '/'.
-std::string withoutSlash(const std::string& frame) { return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame; }
+std::string withoutSlash(const std::string& frame) {
+  return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
+}
 
 const std::vector<std::string> kLivoxFields{"offset_time(uint32)", "x(float32)", "y(float32)", "z(float32)",
                                             "reflectivity(uint8)", "tag(uint8)", "line(uint8)"};

@@ -27,7 +27,8 @@ void checkFile(const std::string& path) {
   if (head.rfind("#ROSBAG V2.0", 0) != 0) {
     if (head.rfind("#ROSBAG V", 0) == 0)
       throw Error(path + " is an old ROS bag format (" + head.substr(1, 11) + "): run `rosbag fix` to convert it");
-    throw Error(path + " is not a bag: neither ROS 1 (#ROSBAG V2.0 header) nor ROS 2 (rosbag2 folder, .db3 or .mcap file)");
+    throw Error(path +
+                " is not a bag: neither ROS 1 (#ROSBAG V2.0 header) nor ROS 2 (rosbag2 folder, .db3 or .mcap file)");
   }
 }
 

@@ -90,9 +90,8 @@ void BagWriter::writeVelodyneCloud(const std::string& topic, const std::string& 
   sensor_msgs::PointCloud2 msg;
   msg.header = header(frame_id, scan.start_ns, impl_->seq++);
   using PF = sensor_msgs::PointField;
-  msg.fields = {field("x", 0, PF::FLOAT32),         field("y", 4, PF::FLOAT32),
-                field("z", 8, PF::FLOAT32),         field("intensity", 12, PF::FLOAT32),
-                field("ring", 16, PF::UINT16),      field("time", 18, PF::FLOAT32)};
+  msg.fields = {field("x", 0, PF::FLOAT32),          field("y", 4, PF::FLOAT32),    field("z", 8, PF::FLOAT32),
+                field("intensity", 12, PF::FLOAT32), field("ring", 16, PF::UINT16), field("time", 18, PF::FLOAT32)};
   constexpr std::uint32_t kStep = 22;
   msg.height = 1;
   msg.width = static_cast<std::uint32_t>(scan.points.size());

@@ -50,7 +50,8 @@ Calibration readCalibration(const std::string& path) {
     const std::string where = yamlLocation(path, entry["T_imu_sensor"]) + ": sensor '" + name + "': T_imu_sensor";
     decodeYaml(entry["T_imu_sensor"], where, calib.T_imu_sensor);
     if (entry["time_offset_s"])
-      decodeYaml(entry["time_offset_s"], yamlLocation(path, entry["time_offset_s"]) + ": sensor '" + name + "': time_offset_s",
+      decodeYaml(entry["time_offset_s"],
+                 yamlLocation(path, entry["time_offset_s"]) + ": sensor '" + name + "': time_offset_s",
                  calib.time_offset_s);
     sensors[name] = calib;
   }

@@ -17,25 +17,43 @@ constexpr double kAbsoluteTimeS = 1e6;  // a per-point time above this is an abs
 
 std::size_t datatypeSize(std::uint8_t type) {
   switch (type) {
-    case PF::INT8: case PF::UINT8: return 1;
-    case PF::INT16: case PF::UINT16: return 2;
-    case PF::INT32: case PF::UINT32: case PF::FLOAT32: return 4;
-    case PF::FLOAT64: return 8;
-    default: return 0;
+    case PF::INT8:
+    case PF::UINT8:
+      return 1;
+    case PF::INT16:
+    case PF::UINT16:
+      return 2;
+    case PF::INT32:
+    case PF::UINT32:
+    case PF::FLOAT32:
+      return 4;
+    case PF::FLOAT64:
+      return 8;
+    default:
+      return 0;
   }
 }
 
 const char* datatypeName(std::uint8_t type) {
   switch (type) {
-    case PF::INT8: return "int8";
-    case PF::UINT8: return "uint8";
-    case PF::INT16: return "int16";
-    case PF::UINT16: return "uint16";
-    case PF::INT32: return "int32";
-    case PF::UINT32: return "uint32";
-    case PF::FLOAT32: return "float32";
-    case PF::FLOAT64: return "float64";
-    default: return "unknown";
+    case PF::INT8:
+      return "int8";
+    case PF::UINT8:
+      return "uint8";
+    case PF::INT16:
+      return "int16";
+    case PF::UINT16:
+      return "uint16";
+    case PF::INT32:
+      return "int32";
+    case PF::UINT32:
+      return "uint32";
+    case PF::FLOAT32:
+      return "float32";
+    case PF::FLOAT64:
+      return "float64";
+    default:
+      return "unknown";
   }
 }
 
@@ -57,15 +75,24 @@ struct FieldReader {
   double operator()(const std::uint8_t* p) const {
     if (type == PF::FLOAT32 && !swap) return raw<float>(p);  // nearly every driver's x, y, z, intensity, time
     switch (type) {
-      case PF::INT8: return raw<std::int8_t>(p);
-      case PF::UINT8: return raw<std::uint8_t>(p);
-      case PF::INT16: return raw<std::int16_t>(p);
-      case PF::UINT16: return raw<std::uint16_t>(p);
-      case PF::INT32: return raw<std::int32_t>(p);
-      case PF::UINT32: return raw<std::uint32_t>(p);
-      case PF::FLOAT32: return raw<float>(p);
-      case PF::FLOAT64: return raw<double>(p);
-      default: return 0.0;
+      case PF::INT8:
+        return raw<std::int8_t>(p);
+      case PF::UINT8:
+        return raw<std::uint8_t>(p);
+      case PF::INT16:
+        return raw<std::int16_t>(p);
+      case PF::UINT16:
+        return raw<std::uint16_t>(p);
+      case PF::INT32:
+        return raw<std::int32_t>(p);
+      case PF::UINT32:
+        return raw<std::uint32_t>(p);
+      case PF::FLOAT32:
+        return raw<float>(p);
+      case PF::FLOAT64:
+        return raw<double>(p);
+      default:
+        return 0.0;
     }
   }
 };
@@ -233,9 +260,12 @@ LidarScan decodePointCloud2(const sensor_msgs::PointCloud2& msg, const CloudDeco
       const Stamp t_ns = [&]() -> Stamp {
         switch (time_kind) {
           case TimeKind::kRelativeS:
-          case TimeKind::kAbsoluteS: return std::abs(tv) > kAbsoluteTimeS ? fromSec(tv) : header_ns + fromSec(tv);
-          case TimeKind::kRelativeNs: return header_ns + static_cast<Stamp>(std::llround(tv));
-          case TimeKind::kAzimuth: break;
+          case TimeKind::kAbsoluteS:
+            return std::abs(tv) > kAbsoluteTimeS ? fromSec(tv) : header_ns + fromSec(tv);
+          case TimeKind::kRelativeNs:
+            return header_ns + static_cast<Stamp>(std::llround(tv));
+          case TimeKind::kAzimuth:
+            break;
         }
         return header_ns + fromSec(clock.timeS(xyz));
       }();
@@ -273,8 +303,8 @@ ImuSample decodeImu(const sensor_msgs::Imu& msg, double acc_scale) {
   ImuSample s;
   s.stamp_ns = stampNs(msg.header.stamp);
   s.gyro_rad_s = {msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z};
-  s.acc_m_s2 = Eigen::Vector3d(msg.linear_acceleration.x, msg.linear_acceleration.y, msg.linear_acceleration.z) *
-               acc_scale;
+  s.acc_m_s2 =
+      Eigen::Vector3d(msg.linear_acceleration.x, msg.linear_acceleration.y, msg.linear_acceleration.z) * acc_scale;
   return s;
 }
 

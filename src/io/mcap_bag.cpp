@@ -177,27 +177,28 @@ class McapBag final : public Ros2Bag {
       std::vector<ChunkIndex> chunks;
       std::uint64_t message_count = 0;
       bool have_statistics = false;
-      const bool intact = forEachRecord(summary.data(), summary.size(), [&](std::uint8_t op, const std::uint8_t* p, std::size_t n) {
-        if (op == kSchema || op == kChannel) {
-          definition(op, p, n);
-        } else if (op == kStatistics) {
-          message_count = Fields(p, n).get<std::uint64_t>();
-          have_statistics = true;
-        } else if (op == kChunkIndex) {
-          Fields f(p, n);
-          ChunkIndex c;
-          c.start_ns = static_cast<Stamp>(f.get<std::uint64_t>());
-          f.get<std::uint64_t>();
-          c.offset = f.get<std::uint64_t>();
-          c.length = f.get<std::uint64_t>();
-          const auto map_bytes = f.get<std::uint32_t>();
-          for (std::uint32_t k = 0; k + 10 <= map_bytes; k += 10) {
-            const auto channel = f.get<std::uint16_t>();
-            c.message_indexes.emplace_back(channel, f.get<std::uint64_t>());
-          }
-          chunks.push_back(std::move(c));
-        }
-      });
+      const bool intact =
+          forEachRecord(summary.data(), summary.size(), [&](std::uint8_t op, const std::uint8_t* p, std::size_t n) {
+            if (op == kSchema || op == kChannel) {
+              definition(op, p, n);
+            } else if (op == kStatistics) {
+              message_count = Fields(p, n).get<std::uint64_t>();
+              have_statistics = true;
+            } else if (op == kChunkIndex) {
+              Fields f(p, n);
+              ChunkIndex c;
+              c.start_ns = static_cast<Stamp>(f.get<std::uint64_t>());
+              f.get<std::uint64_t>();
+              c.offset = f.get<std::uint64_t>();
+              c.length = f.get<std::uint64_t>();
+              const auto map_bytes = f.get<std::uint32_t>();
+              for (std::uint32_t k = 0; k + 10 <= map_bytes; k += 10) {
+                const auto channel = f.get<std::uint16_t>();
+                c.message_indexes.emplace_back(channel, f.get<std::uint64_t>());
+              }
+              chunks.push_back(std::move(c));
+            }
+          });
       if (!intact || !have_statistics || chunks.empty()) return forgetSummary();
       std::uint64_t indexed_messages = 0;
       for (const ChunkIndex& c : chunks) {
@@ -216,7 +217,8 @@ class McapBag final : public Ros2Bag {
         if (u.topics) units_.push_back(u);
       }
       if (indexed_messages != message_count) return forgetSummary();
-      std::stable_sort(units_.begin(), units_.end(), [](const Unit& a, const Unit& b) { return a.start_ns < b.start_ns; });
+      std::stable_sort(units_.begin(), units_.end(),
+                       [](const Unit& a, const Unit& b) { return a.start_ns < b.start_ns; });
       return true;
     } catch (const Error&) {
       return forgetSummary();

@@ -40,10 +40,14 @@ std::string pcdBinaryHeader(std::size_t num_points) {
          "SIZE 4 4 4 4\n"
          "TYPE F F F F\n"
          "COUNT 1 1 1 1\n"
-         "WIDTH " + n + "\n"
+         "WIDTH " +
+         n +
+         "\n"
          "HEIGHT 1\n"
          "VIEWPOINT 0 0 0 1 0 0 0\n"
-         "POINTS " + n + "\n"
+         "POINTS " +
+         n +
+         "\n"
          "DATA binary\n";
 }
 
@@ -59,7 +63,8 @@ void writePcdBinary(const std::string& path, const std::vector<Point>& points) {
         const Point& p = points[i];
         buffer.insert(buffer.end(), {p.xyz.x(), p.xyz.y(), p.xyz.z(), p.intensity});
       }
-      out.write(reinterpret_cast<const char*>(buffer.data()), static_cast<std::streamsize>(buffer.size() * sizeof(float)));
+      out.write(reinterpret_cast<const char*>(buffer.data()),
+                static_cast<std::streamsize>(buffer.size() * sizeof(float)));
     }
   });
 }
@@ -69,7 +74,11 @@ namespace {
 void encodeValue(double value, const PcdField& f, char* out) {
   switch (f.type) {
     case 'F':
-      if (f.size == 4) { const float v = static_cast<float>(value); std::memcpy(out, &v, 4); return; }
+      if (f.size == 4) {
+        const float v = static_cast<float>(value);
+        std::memcpy(out, &v, 4);
+        return;
+      }
       std::memcpy(out, &value, 8);
       return;
     case 'U': {
@@ -93,10 +102,12 @@ void writePcdFieldsBinary(const std::string& path, const PcdCloud& cloud) {
     throw Error("writing PCD '" + path + "': header.fields, fields and columns differ in length");
   for (std::size_t i = 0; i < fields.size(); ++i) {
     const PcdField& f = fields[i];
-    const bool ok_type = (f.type == 'F' && (f.size == 4 || f.size == 8)) ||
-                         ((f.type == 'U' || f.type == 'I') && (f.size == 1 || f.size == 2 || f.size == 4 || f.size == 8));
+    const bool ok_type =
+        (f.type == 'F' && (f.size == 4 || f.size == 8)) ||
+        ((f.type == 'U' || f.type == 'I') && (f.size == 1 || f.size == 2 || f.size == 4 || f.size == 8));
     if (f.name != cloud.fields[i] || f.count != 1 || !ok_type)
-      throw Error("writing PCD '" + path + "': field '" + f.name + "' must match its column, COUNT 1, TYPE F4/F8/U*/I*");
+      throw Error("writing PCD '" + path + "': field '" + f.name +
+                  "' must match its column, COUNT 1, TYPE F4/F8/U*/I*");
     if (cloud.columns[i].size() != cloud.size())
       throw Error("writing PCD '" + path + "': column '" + f.name + "' has a different length");
   }
@@ -109,9 +120,9 @@ void writePcdFieldsBinary(const std::string& path, const PcdCloud& cloud) {
     counts += " 1";
   }
   writeFileAtomically(path, [&](std::ostream& out) {
-    out << "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS" << names << "\nSIZE" << sizes
-        << "\nTYPE" << types << "\nCOUNT" << counts << "\nWIDTH " << n << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS "
-        << n << "\nDATA binary\n";
+    out << "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS" << names << "\nSIZE" << sizes << "\nTYPE"
+        << types << "\nCOUNT" << counts << "\nWIDTH " << n << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << n
+        << "\nDATA binary\n";
     std::vector<char> row(cloud.header.pointStepBytes());
     for (std::size_t p = 0; p < n; ++p) {
       std::size_t offset = 0;
@@ -228,7 +239,8 @@ PcdHeader parseHeader(const std::string& path, const std::string& bytes) {
   if (h.data != "ascii" && h.data != "binary" && h.data != "binary_compressed")
     throw Error("PCD '" + path + "': unknown DATA format '" + h.data + "' (ascii, binary, binary_compressed)");
   if (names.empty()) throw Error("PCD '" + path + "': no FIELDS line");
-  if (sizes.size() != names.size() || types.size() != names.size() || (!counts.empty() && counts.size() != names.size()))
+  if (sizes.size() != names.size() || types.size() != names.size() ||
+      (!counts.empty() && counts.size() != names.size()))
     throw Error("PCD '" + path + "': FIELDS, SIZE, TYPE and COUNT have different lengths");
   for (std::size_t i = 0; i < names.size(); ++i) {
     PcdField f;
@@ -236,8 +248,9 @@ PcdHeader parseHeader(const std::string& path, const std::string& bytes) {
     f.size = static_cast<int>(toCount(path, "SIZE", sizes[i]));
     f.type = types[i].size() == 1 ? types[i][0] : '?';
     f.count = counts.empty() ? 1 : static_cast<int>(toCount(path, "COUNT", counts[i]));
-    const bool ok_type = (f.type == 'F' && (f.size == 4 || f.size == 8)) ||
-                         ((f.type == 'U' || f.type == 'I') && (f.size == 1 || f.size == 2 || f.size == 4 || f.size == 8));
+    const bool ok_type =
+        (f.type == 'F' && (f.size == 4 || f.size == 8)) ||
+        ((f.type == 'U' || f.type == 'I') && (f.size == 1 || f.size == 2 || f.size == 4 || f.size == 8));
     if (!ok_type || f.count < 1)
       throw Error("PCD '" + path + "': field '" + f.name + "' has unsupported TYPE " + types[i] + " SIZE " + sizes[i]);
     h.fields.push_back(f);
@@ -246,8 +259,8 @@ PcdHeader parseHeader(const std::string& path, const std::string& bytes) {
   if (!have_points) h.points = h.width * h.height;
   if (!have_width) h.width = h.points, h.height = 1;
   if (h.width * h.height != h.points)
-    throw Error("PCD '" + path + "': WIDTH * HEIGHT = " + std::to_string(h.width * h.height) + " but POINTS = " +
-                std::to_string(h.points));
+    throw Error("PCD '" + path + "': WIDTH * HEIGHT = " + std::to_string(h.width * h.height) +
+                " but POINTS = " + std::to_string(h.points));
   h.data_offset = pos;
   return h;
 }
@@ -255,21 +268,55 @@ PcdHeader parseHeader(const std::string& path, const std::string& bytes) {
 double decodeValue(const std::uint8_t* p, const PcdField& f) {
   switch (f.type) {
     case 'F':
-      if (f.size == 4) { float v; std::memcpy(&v, p, 4); return v; }
-      { double v; std::memcpy(&v, p, 8); return v; }
+      if (f.size == 4) {
+        float v;
+        std::memcpy(&v, p, 4);
+        return v;
+      }
+      {
+        double v;
+        std::memcpy(&v, p, 8);
+        return v;
+      }
     case 'U':
       switch (f.size) {
-        case 1: return *p;
-        case 2: { std::uint16_t v; std::memcpy(&v, p, 2); return v; }
-        case 4: { std::uint32_t v; std::memcpy(&v, p, 4); return v; }
-        default: { std::uint64_t v; std::memcpy(&v, p, 8); return static_cast<double>(v); }
+        case 1:
+          return *p;
+        case 2: {
+          std::uint16_t v;
+          std::memcpy(&v, p, 2);
+          return v;
+        }
+        case 4: {
+          std::uint32_t v;
+          std::memcpy(&v, p, 4);
+          return v;
+        }
+        default: {
+          std::uint64_t v;
+          std::memcpy(&v, p, 8);
+          return static_cast<double>(v);
+        }
       }
     default:
       switch (f.size) {
-        case 1: return static_cast<std::int8_t>(*p);
-        case 2: { std::int16_t v; std::memcpy(&v, p, 2); return v; }
-        case 4: { std::int32_t v; std::memcpy(&v, p, 4); return v; }
-        default: { std::int64_t v; std::memcpy(&v, p, 8); return static_cast<double>(v); }
+        case 1:
+          return static_cast<std::int8_t>(*p);
+        case 2: {
+          std::int16_t v;
+          std::memcpy(&v, p, 2);
+          return v;
+        }
+        case 4: {
+          std::int32_t v;
+          std::memcpy(&v, p, 4);
+          return v;
+        }
+        default: {
+          std::int64_t v;
+          std::memcpy(&v, p, 8);
+          return static_cast<double>(v);
+        }
       }
   }
 }
@@ -358,8 +405,8 @@ PcdCloud readPcdFields(const std::string& path) {
       throw Error("PCD '" + path + "': truncated, compressed size " + std::to_string(compressed) + " but only " +
                   std::to_string(available - 8) + " bytes follow");
     if (uncompressed < n * step)
-      throw Error("PCD '" + path + "': uncompressed size " + std::to_string(uncompressed) + " < " +
-                  std::to_string(n) + " points x " + std::to_string(step) + " bytes");
+      throw Error("PCD '" + path + "': uncompressed size " + std::to_string(uncompressed) + " < " + std::to_string(n) +
+                  " points x " + std::to_string(step) + " bytes");
     std::vector<std::uint8_t> raw(uncompressed);
     if (n > 0 && lzfDecompress(data + 8, compressed, raw.data(), raw.size()) != uncompressed)
       throw Error("PCD '" + path + "': corrupt LZF data");

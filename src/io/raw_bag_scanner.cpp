@@ -61,8 +61,7 @@ Stamp fieldTime(const Fields& f) {
 /// Calls f(offset, fields, data_offset, data_len) for each intact record of a chunk payload of n
 /// bytes, in order, until the first damaged one (lengths running past the payload, unparsable
 /// header). read(offset, len, dst) copies payload bytes; only the records' headers are read.
-template <class Read, class F>
-void walkRecords(std::size_t n, Read read, F f) {
+template <class Read, class F> void walkRecords(std::size_t n, Read read, F f) {
   std::vector<std::uint8_t> header;
   std::uint8_t len4[4];
   for (std::size_t i = 0; i + 4 <= n;) {
@@ -90,8 +89,7 @@ auto payloadReader(const std::vector<std::uint8_t>& payload) {
 }
 
 /// walkRecords over a payload in memory; f gets a pointer to each record's data.
-template <class F>
-void forEachRecord(const std::vector<std::uint8_t>& payload, F f) {
+template <class F> void forEachRecord(const std::vector<std::uint8_t>& payload, F f) {
   walkRecords(payload.size(), payloadReader(payload),
               [&](std::size_t i, const Fields& fields, std::size_t dpos, std::uint32_t dl) {
                 f(i, fields, payload.data() + dpos, dl);
@@ -232,9 +230,11 @@ bool indexLooksSound(const std::string& path, std::string* why) {
     } else if (kind == kOpChunkInfo) {
       const auto it = r.fields.find("chunk_pos");
       std::uint64_t chunk_pos = 0;
-      if (it == r.fields.end() || it->second.size() != 8) return fail("damaged chunk info at byte " + std::to_string(pos));
+      if (it == r.fields.end() || it->second.size() != 8)
+        return fail("damaged chunk info at byte " + std::to_string(pos));
       std::memcpy(&chunk_pos, it->second.data(), 8);
-      if (!chunk_positions.count(chunk_pos)) return fail("chunk info names no chunk (byte " + std::to_string(pos) + ")");
+      if (!chunk_positions.count(chunk_pos))
+        return fail("chunk info names no chunk (byte " + std::to_string(pos) + ")");
     }
     pos = r.data_pos + r.data_len;
   }
@@ -293,13 +293,13 @@ std::vector<std::uint8_t> readChunkPayload(std::ifstream& in, const RawChunk& c,
   if (c.compression == "none") return raw;
   std::vector<std::uint8_t> out(c.uncompressed_size);
   unsigned int out_size = c.uncompressed_size;
-  const bool ok = c.compression == "bz2"
-                      ? BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(out.data()), &out_size,
-                                                   reinterpret_cast<char*>(raw.data()),
-                                                   static_cast<unsigned int>(raw.size()), 0, 0) == BZ_OK
-                      : roslz4_buffToBuffDecompress(reinterpret_cast<char*>(raw.data()),
-                                                    static_cast<unsigned int>(raw.size()),
-                                                    reinterpret_cast<char*>(out.data()), &out_size) == ROSLZ4_OK;
+  const bool ok =
+      c.compression == "bz2"
+          ? BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(out.data()), &out_size,
+                                       reinterpret_cast<char*>(raw.data()), static_cast<unsigned int>(raw.size()), 0,
+                                       0) == BZ_OK
+          : roslz4_buffToBuffDecompress(reinterpret_cast<char*>(raw.data()), static_cast<unsigned int>(raw.size()),
+                                        reinterpret_cast<char*>(out.data()), &out_size) == ROSLZ4_OK;
   if (!ok) throw Error("cannot decompress a " + c.compression + " chunk of " + path_);
   out.resize(out_size);
   return out;
@@ -350,7 +350,8 @@ std::vector<RawMessage> RawBagScanner::readChunk(std::size_t i) const {
   std::vector<RawMessage> out;
   RawChunk c = chunks_.at(i);
   parsePayload(chunkPayload(c), &out, &c, nullptr);
-  std::stable_sort(out.begin(), out.end(), [](const RawMessage& a, const RawMessage& b) { return a.time_ns < b.time_ns; });
+  std::stable_sort(out.begin(), out.end(),
+                   [](const RawMessage& a, const RawMessage& b) { return a.time_ns < b.time_ns; });
   return out;
 }
 

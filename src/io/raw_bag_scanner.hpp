@@ -58,8 +58,8 @@ class RawBagScanner {
  private:
   std::vector<std::uint8_t> chunkPayload(const RawChunk& c) const;
   /// Parses the records of a chunk payload; complete records only.
-  static void parsePayload(const std::vector<std::uint8_t>& payload, std::vector<RawMessage>* messages,
-                           RawChunk* chunk, std::map<std::uint32_t, RawConnection>* connections);
+  static void parsePayload(const std::vector<std::uint8_t>& payload, std::vector<RawMessage>* messages, RawChunk* chunk,
+                           std::map<std::uint32_t, RawConnection>* connections);
 
   std::string path_;
   std::map<std::uint32_t, RawConnection> connections_;

@@ -21,17 +21,19 @@ void bind(YamlBinder& b, LidarConfig& c) {
           "velodyne | ouster | hesai | generic_spinning (sensor_msgs/PointCloud2 with rings),\n"
           "livox (livox_ros_driver/CustomMsg, solid state) (required)");
   b.field("topic", c.topic, "ROS topic of this LiDAR's point clouds (required)");
-  b.field("T_imu_sensor", c.T_imu_sensor,
-          "extrinsic: maps points from this LiDAR's frame into the IMU frame: 4x4 row-major, m, or\n"
-          "{xyz: [x, y, z], rpy_deg: [roll, pitch, yaw]} (ROS/URDF order) or {xyz: [...], quaternion: [qx, qy, qz, qw]}");
+  b.field(
+      "T_imu_sensor", c.T_imu_sensor,
+      "extrinsic: maps points from this LiDAR's frame into the IMU frame: 4x4 row-major, m, or\n"
+      "{xyz: [x, y, z], rpy_deg: [roll, pitch, yaw]} (ROS/URDF order) or {xyz: [...], quaternion: [qx, qy, qz, qw]}");
   b.field("time_offset_s", c.time_offset_s, "clock offset, s: t_imu = t_stamp + time_offset_s");
   b.field("min_range_m", c.min_range_m, "drop returns closer than this (rig, vehicle), m");
   b.field("max_range_m", c.max_range_m, "drop returns farther than this, m");
   b.field("num_rings", c.num_rings, "laser rings (VLP-16: 16) or, for livox, scan lines (Horizon: 6)");
   b.field("enabled", c.enabled, "false: ignore this LiDAR in every mode");
   if (b.reading() && !b.has("T_imu_sensor"))
-    log::warn(b.location(), ": ", b.path("T_imu_sensor"), " not given: LiDAR '", c.name,
-              "' is taken to sit at the IMU, unrotated (identity); give its extrinsic or calibrate it (mmlio calibrate)");
+    log::warn(
+        b.location(), ": ", b.path("T_imu_sensor"), " not given: LiDAR '", c.name,
+        "' is taken to sit at the IMU, unrotated (identity); give its extrinsic or calibrate it (mmlio calibrate)");
 }
 
 // `imu:` holds how the IMU arrives (ImuConfig) and the estimator's model of it.
@@ -138,11 +140,14 @@ void bind(YamlBinder& b, RigConfig& c) {
   b.field("reference_lidar", c.reference_lidar,
           "LiDAR whose sweeps define the fusion window (falls back to the first active one)");
   b.section("imu", c, bindImu, "IMU");
-  b.list("lidars", c.lidars, [](YamlBinder& s, LidarConfig& v) { bind(s, v); }, "LiDARs of the rig");
-  b.section("features", c.estimator.features, [](YamlBinder& s, lidar::FeatureConfig& v) { bind(s, v); },
-            "feature extraction");
-  b.section("bad_frame", c.estimator.bad_frame, [](YamlBinder& s, lidar::BadFrameConfig& v) { bind(s, v); },
-            "bad-frame check for solid-state LiDARs");
+  b.list(
+      "lidars", c.lidars, [](YamlBinder& s, LidarConfig& v) { bind(s, v); }, "LiDARs of the rig");
+  b.section(
+      "features", c.estimator.features, [](YamlBinder& s, lidar::FeatureConfig& v) { bind(s, v); },
+      "feature extraction");
+  b.section(
+      "bad_frame", c.estimator.bad_frame, [](YamlBinder& s, lidar::BadFrameConfig& v) { bind(s, v); },
+      "bad-frame check for solid-state LiDARs");
   b.section("odometry", c.estimator, bindOdometry, "sliding-window odometry");
   b.section("loop", c.mapping, bindLoop, "loop closure");
   b.section("dynamic", c, bindDynamic, "moving objects (people): rejection in the odometry, ghost removal in the map");
@@ -230,20 +235,17 @@ class Checker {
   void require(bool ok, const std::string& key_path, const std::string& problem) const {
     if (!ok) throw Error(file_ + ": " + key_path + ": " + problem);
   }
-  template <typename T>
-  void positive(T value, const std::string& key_path) const {
+  template <typename T> void positive(T value, const std::string& key_path) const {
     require(std::isfinite(static_cast<double>(value)) && value > T(0), key_path,
             "must be a finite number > 0, got " + toString(value));
   }
-  template <typename T>
-  void nonNegative(T value, const std::string& key_path) const {
+  template <typename T> void nonNegative(T value, const std::string& key_path) const {
     require(std::isfinite(static_cast<double>(value)) && value >= T(0), key_path,
             "must be a finite number >= 0, got " + toString(value));
   }
 
  private:
-  template <typename T>
-  static std::string toString(T value) {
+  template <typename T> static std::string toString(T value) {
     std::ostringstream os;
     os << value;
     return os.str();
@@ -298,14 +300,17 @@ void validateRigConfig(const RigConfig& cfg) {
   }
   bool reference_known = false;
   for (const auto& n : names) reference_known = reference_known || n == cfg.reference_lidar;
-  check.require(reference_known, "reference_lidar", "'" + cfg.reference_lidar + "' is not one of the lidars (" + join(names) + ")");
-  check.require(!activeLidars(cfg, cfg.mode).empty(), "mode", "'" + cfg.mode + "' uses no enabled LiDAR of this rig (vi needs a spinning one, hi a livox)");
+  check.require(reference_known, "reference_lidar",
+                "'" + cfg.reference_lidar + "' is not one of the lidars (" + join(names) + ")");
+  check.require(!activeLidars(cfg, cfg.mode).empty(), "mode",
+                "'" + cfg.mode + "' uses no enabled LiDAR of this rig (vi needs a spinning one, hi a livox)");
 
   const lidar::FeatureConfig& f = e.features;
   check.positive(f.neighbours, "features.neighbours");
   check.nonNegative(f.edge_threshold, "features.edge_threshold");
   check.nonNegative(f.plane_threshold, "features.plane_threshold");
-  check.require(f.plane_threshold <= f.edge_threshold, "features.plane_threshold", "must be <= features.edge_threshold");
+  check.require(f.plane_threshold <= f.edge_threshold, "features.plane_threshold",
+                "must be <= features.edge_threshold");
   check.positive(f.continuity_jump_m, "features.continuity_jump_m");
 
   check.nonNegative(e.bad_frame.min_edge_range_m, "bad_frame.min_edge_range_m");
@@ -372,8 +377,7 @@ std::vector<const LidarConfig*> activeLidars(const RigConfig& cfg, const std::st
 
 const LidarConfig& referenceLidar(const RigConfig& cfg, const std::string& mode) {
   const auto active = activeLidars(cfg, mode);
-  if (active.empty())
-    throw Error(cfg.source_path + ": mode '" + mode + "' uses no enabled LiDAR of this rig");
+  if (active.empty()) throw Error(cfg.source_path + ": mode '" + mode + "' uses no enabled LiDAR of this rig");
   for (const LidarConfig* l : active)
     if (l->name == cfg.reference_lidar) return *l;
   return *active.front();

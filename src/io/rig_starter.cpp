@@ -114,8 +114,8 @@ std::optional<Eigen::Isometry3d> chain(const std::vector<StaticTransform>& tfs, 
 std::string xyzQuaternion(const Eigen::Isometry3d& T) {
   const Eigen::Quaterniond q(T.linear());
   char text[256];
-  std::snprintf(text, sizeof text, "{xyz: [%.6f, %.6f, %.6f], quaternion: [%.9f, %.9f, %.9f, %.9f]}", T.translation().x(),
-                T.translation().y(), T.translation().z(), q.x(), q.y(), q.z(), q.w());
+  std::snprintf(text, sizeof text, "{xyz: [%.6f, %.6f, %.6f], quaternion: [%.9f, %.9f, %.9f, %.9f]}",
+                T.translation().x(), T.translation().y(), T.translation().z(), q.x(), q.y(), q.z(), q.w());
   return text;
 }
 
@@ -136,9 +136,12 @@ std::string starterRigConfig(const BagInfo& info) {
   std::vector<const TopicInfo*> imus;
   std::vector<Lidar> spinning, solid;
   for (const TopicInfo& t : info.topics) {
-    if (isImu(t)) imus.push_back(&t);
-    else if (isCloud(t)) spinning.push_back(spinningLidar(t));
-    else if (isLivox(t)) solid.push_back(solidStateLidar(t));
+    if (isImu(t))
+      imus.push_back(&t);
+    else if (isCloud(t))
+      spinning.push_back(spinningLidar(t));
+    else if (isLivox(t))
+      solid.push_back(solidStateLidar(t));
   }
   if (imus.empty()) throw Error(info.path + " has no sensor_msgs/Imu topic: mmlio needs an IMU");
   if (spinning.empty() && solid.empty())
@@ -157,7 +160,8 @@ std::string starterRigConfig(const BagInfo& info) {
     if (info.static_transforms.empty()) continue;
     if (const auto T = chain(info.static_transforms, imu_frame, l.frame)) {
       l.extrinsic = xyzQuaternion(*T);
-      l.extrinsic_note = "from /tf_static: " + l.frame + " in " + imu_frame + "; CHECK it is the mount, not a placeholder";
+      l.extrinsic_note =
+          "from /tf_static: " + l.frame + " in " + imu_frame + "; CHECK it is the mount, not a placeholder";
     } else {
       l.extrinsic_note += " (/tf_static does not connect '" + imu_frame + "' and '" + l.frame + "')";
     }
@@ -170,7 +174,8 @@ std::string starterRigConfig(const BagInfo& info) {
     << "# Only what differs from the defaults (`mmlio config --dump-defaults` lists every key with its\n"
     << "# meaning); `mmlio config THIS_FILE` checks it. Read every line marked CHECK.\n";
   y << "mode: " << mode << "  # "
-    << (mode == "hvi"   ? "a spinning and a solid-state LiDAR: fused (vi: the spinning one alone, hi: the solid-state one)"
+    << (mode == "hvi"
+            ? "a spinning and a solid-state LiDAR: fused (vi: the spinning one alone, hi: the solid-state one)"
         : mode == "vi" ? "only spinning LiDARs in the bag"
                        : "only solid-state LiDARs in the bag")
     << "\n";

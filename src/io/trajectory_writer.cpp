@@ -23,8 +23,7 @@ void writeFileAtomically(const std::string& path, const std::function<void(std::
     if (!out) throw Error("write to '" + path + "' failed (disk full?)");
     out.close();
     if (!out) throw Error("closing '" + path + "' failed (disk full?)");
-    if (std::rename(tmp.c_str(), path.c_str()) != 0)
-      throw Error("cannot rename '" + tmp + "' to '" + path + "'");
+    if (std::rename(tmp.c_str(), path.c_str()) != 0) throw Error("cannot rename '" + tmp + "' to '" + path + "'");
   } catch (...) {
     std::remove(tmp.c_str());
     throw;
@@ -43,7 +42,8 @@ std::string formatDouble(double value) {
 std::string formatStampSeconds(Stamp stamp_ns) {
   const bool negative = stamp_ns < 0;
   // Work in unsigned to survive INT64_MIN.
-  const std::uint64_t magnitude = negative ? 0ULL - static_cast<std::uint64_t>(stamp_ns) : static_cast<std::uint64_t>(stamp_ns);
+  const std::uint64_t magnitude =
+      negative ? 0ULL - static_cast<std::uint64_t>(stamp_ns) : static_cast<std::uint64_t>(stamp_ns);
   char buf[48];
   std::snprintf(buf, sizeof(buf), "%s%llu.%09llu", negative ? "-" : "",
                 static_cast<unsigned long long>(magnitude / 1000000000ULL),

@@ -87,7 +87,8 @@ void deskewToEnd(LidarScan& scan, const Eigen::Isometry3d& T_imu_sensor, const S
   const Eigen::Isometry3d T_ref_inv = motion.at(sweep_end_s).inverse();
   std::vector<Eigen::Matrix<float, 3, 4>> table(static_cast<std::size_t>(nodes));
   for (int k = 0; k < nodes; ++k)
-    table[k] = (T_sensor_imu * (T_ref_inv * motion.at(tmin + k * step)) * T_imu_sensor).matrix().topRows<3>().cast<float>();
+    table[k] =
+        (T_sensor_imu * (T_ref_inv * motion.at(tmin + k * step)) * T_imu_sensor).matrix().topRows<3>().cast<float>();
   const float inv_step = static_cast<float>(1.0 / step);
   for (Point& p : scan.points) {
     const float x = (p.time_s - tmin) * inv_step;

@@ -59,12 +59,12 @@ double straightness(const std::vector<Eigen::Vector3d>& P, int i, int K, int str
 
 // What every point's test reads of one ordered scan line, computed in one pass.
 struct LineGeometry {
-  std::vector<double> sq_norm;           // |P_j|^2
-  std::vector<double> inv_range;         // 1 / |P_j| (P has no zero-range points)
-  std::vector<Eigen::Vector3d> prefix;   // prefix[j] = sum of P[0..j)
-  std::vector<char> gap;                 // gap[j]: break between j and j+1
-  std::vector<int> gaps_before;          // breaks between consecutive points among 0..j
-  double step_rad = 0.0;                 // median angular step between consecutive points (0: none)
+  std::vector<double> sq_norm;          // |P_j|^2
+  std::vector<double> inv_range;        // 1 / |P_j| (P has no zero-range points)
+  std::vector<Eigen::Vector3d> prefix;  // prefix[j] = sum of P[0..j)
+  std::vector<char> gap;                // gap[j]: break between j and j+1
+  std::vector<int> gaps_before;         // breaks between consecutive points among 0..j
+  double step_rad = 0.0;                // median angular step between consecutive points (0: none)
 
   bool continuous(int a, int b) const { return gaps_before[b] == gaps_before[a]; }  // a <= b
 };
@@ -235,7 +235,8 @@ void processLine(const std::vector<Eigen::Vector3d>& P, int K, const FeatureConf
     for (int i = begin; i < end; ++i) {
       if (!picked_plane[i]) continue;
       picked_plane[i] = 0;
-      if (straightness(P, i, K, cand[i].stride) < cfg.plane_max_flatness) planes->push_back(static_cast<std::size_t>(i));
+      if (straightness(P, i, K, cand[i].stride) < cfg.plane_max_flatness)
+        planes->push_back(static_cast<std::size_t>(i));
     }
   }
   std::sort(edges->begin(), edges->end());

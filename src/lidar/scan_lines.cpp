@@ -24,9 +24,9 @@ double azimuthOrderKey(const Point& p) {
   const double x = p.xyz.x(), y = p.xyz.y();
   const double l1 = std::abs(x) + std::abs(y);
   if (l1 <= 0.0) return 0.0;
-  const double t = y / l1;                    // sin-like, in [-1, 1]
-  if (x >= 0.0) return t;                     // (-pi/2, pi/2) -> (-1, 1)
-  return y >= 0.0 ? 2.0 - t : -2.0 - t;       // (pi/2, pi] -> (1, 2]; (-pi, -pi/2) -> (-2, -1)
+  const double t = y / l1;               // sin-like, in [-1, 1]
+  if (x >= 0.0) return t;                // (-pi/2, pi/2) -> (-1, 1)
+  return y >= 0.0 ? 2.0 - t : -2.0 - t;  // (pi/2, pi] -> (1, 2]; (-pi, -pi/2) -> (-2, -1)
 }
 double elevationDeg(const Point& p) {
   const Eigen::Vector3d v = p.xyz.cast<double>();
@@ -98,12 +98,13 @@ std::vector<std::vector<std::size_t>> rangeImageRows(const LidarScan& scan, cons
   cols = std::max(cols, 1);
   std::vector<long> cell(rows * static_cast<std::size_t>(cols), -1);
   for (std::size_t k = 0; k < ids.size(); ++k) {
-    const std::size_t r = static_cast<std::size_t>(std::upper_bound(row_upper.begin(), row_upper.end(), el[k]) -
-                                                   row_upper.begin());
+    const std::size_t r =
+        static_cast<std::size_t>(std::upper_bound(row_upper.begin(), row_upper.end(), el[k]) - row_upper.begin());
     int c = static_cast<int>(std::floor((azimuth(scan.points[ids[k]]) + M_PI) / (2 * M_PI) * cols));
     c = std::clamp(c, 0, cols - 1);
     long& slot = cell[r * static_cast<std::size_t>(cols) + static_cast<std::size_t>(c)];
-    if (slot < 0 || scan.points[ids[k]].xyz.squaredNorm() < scan.points[static_cast<std::size_t>(slot)].xyz.squaredNorm())
+    if (slot < 0 ||
+        scan.points[ids[k]].xyz.squaredNorm() < scan.points[static_cast<std::size_t>(slot)].xyz.squaredNorm())
       slot = static_cast<long>(ids[k]);
   }
   std::vector<std::vector<std::size_t>> lines(rows);

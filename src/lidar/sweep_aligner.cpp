@@ -57,8 +57,12 @@ void SweepAligner::add(const LidarScan& scan) {
   if (scan.sensor == cfg_.reference) {
     reference_mark_ns_ = std::max(reference_mark_ns_, end_ns);
     if (fallback_) {
-      const std::string msg = "sweep aligner: reference LiDAR '" + cfg_.reference + "' is back, its sweeps define the windows again";
-      if (!resume_logged_) log::info(msg); else log::debug(msg);  // a flapping reference must not flood the log
+      const std::string msg =
+          "sweep aligner: reference LiDAR '" + cfg_.reference + "' is back, its sweeps define the windows again";
+      if (!resume_logged_)
+        log::info(msg);
+      else
+        log::debug(msg);  // a flapping reference must not flood the log
       resume_logged_ = true;
       fallback_ = false;
     }
@@ -115,15 +119,15 @@ AlignedSweep SweepAligner::cut(const Window& w) {
   for (const auto& [rank, name] : order) {
     SensorQueue& q = sensors_[*name];
     const auto front = q.points.begin() + static_cast<std::ptrdiff_t>(q.head);
-    const auto before = std::partition_point(front, q.points.end(),
-                                             [&](const TimedPoint& t) { return t.t_ns < w.start_ns; });
+    const auto before =
+        std::partition_point(front, q.points.end(), [&](const TimedPoint& t) { return t.t_ns < w.start_ns; });
     dropped_points_ += static_cast<std::size_t>(before - front);
     LidarScan scan;
     scan.sensor = *name;
     scan.start_ns = w.start_ns;
     // The queue is in time order: the window's points are its front, up to the first at its end.
-    const auto end = std::partition_point(before, q.points.end(),
-                                          [&](const TimedPoint& t) { return t.t_ns < w.end_ns; });
+    const auto end =
+        std::partition_point(before, q.points.end(), [&](const TimedPoint& t) { return t.t_ns < w.end_ns; });
     scan.points.reserve(static_cast<std::size_t>(end - before));
     for (auto it = before; it != end; ++it) {
       Point p = it->p;

@@ -14,8 +14,7 @@ std::vector<Eigen::Vector3d> voxelCentroids(const std::vector<Eigen::Vector3d>& 
   thread_local std::vector<int> count;
   count.clear();
   for (const auto& p : pts) {
-    const auto [slot, inserted] =
-        index.insert(scaledVoxelKeyOf(p, inv), static_cast<std::uint32_t>(sum.size()));
+    const auto [slot, inserted] = index.insert(scaledVoxelKeyOf(p, inv), static_cast<std::uint32_t>(sum.size()));
     if (inserted) {
       sum.push_back(p);
       count.push_back(1);

@@ -88,7 +88,7 @@ RangeImage::RangeImage(const std::vector<Point>& points, const RangeImageConfig&
   // 30 deg span covers at 0.5 deg.
   slot_of_row_.assign(static_cast<std::size_t>(rows_), -1);
   for (const Cell& c : cells) slot_of_row_[static_cast<std::size_t>(c.row - lo)] = 0;  // has returns ...
-  int stored = 0;  // ... numbered in order
+  int stored = 0;                                                                      // ... numbered in order
   for (std::int16_t& slot : slot_of_row_)
     if (slot == 0) slot = static_cast<std::int16_t>(stored++);
   ranges_.assign(static_cast<std::size_t>(stored) * static_cast<std::size_t>(cols_), 0);
@@ -117,14 +117,15 @@ void RangeImage::summariseWindows() {
   const auto ext = static_cast<std::size_t>(ext_rows);
   constexpr std::uint16_t kNone = 0xffff;  // as a nearest range: larger than any saturated one
   constexpr std::uint8_t kBelow = 1, kAbove = 2;
-  thread_local std::vector<std::uint16_t> nearest;  // per column and row: the nearest return within wr rows
-  thread_local std::vector<std::uint8_t> sides;     // ... and whether one lies at or below, at or above
+  thread_local std::vector<std::uint16_t> nearest;       // per column and row: the nearest return within wr rows
+  thread_local std::vector<std::uint8_t> sides;          // ... and whether one lies at or below, at or above
   thread_local std::vector<std::pair<int, int>> stored;  // (row, slot) of the rows with returns
   nearest.assign(ext * static_cast<std::size_t>(cols_), kNone);
   sides.assign(ext * static_cast<std::size_t>(cols_), 0);
   stored.clear();
   for (int y = 0; y < rows_; ++y)
-    if (slot_of_row_[static_cast<std::size_t>(y)] >= 0) stored.emplace_back(y, slot_of_row_[static_cast<std::size_t>(y)]);
+    if (slot_of_row_[static_cast<std::size_t>(y)] >= 0)
+      stored.emplace_back(y, slot_of_row_[static_cast<std::size_t>(y)]);
   for (int x = 0; x < cols_; ++x) {
     std::uint16_t* near = nearest.data() + static_cast<std::size_t>(x) * ext;
     std::uint8_t* side = sides.data() + static_cast<std::size_t>(x) * ext;
@@ -172,8 +173,7 @@ void RangeImage::summariseWindows() {
 }
 
 int RangeImage::colOf(const Eigen::Vector3d& p) const {
-  return std::clamp(floorTo<int>((fastAtan2(p.y(), p.x()) * kRadToDeg + 180.0) * inv_res_), 0,
-                    circle_cols_ - 1);
+  return std::clamp(floorTo<int>((fastAtan2(p.y(), p.x()) * kRadToDeg + 180.0) * inv_res_), 0, circle_cols_ - 1);
 }
 
 void RangeImage::pixelOf(const Eigen::Vector3d& p, int* col, int* row) const {
@@ -194,8 +194,8 @@ Visibility RangeImage::classify(const Eigen::Vector3d& p) const {
   const int arc_col = (colOf(p) - col0_ + circle_cols_) % circle_cols_;
   const int j = windowColumn(arc_col);
   if (j < 0) return Visibility::kUnknown;
-  const std::uint16_t window =
-      windows_[static_cast<std::size_t>(j) * static_cast<std::size_t>(rows_ + 2 * wr) + static_cast<std::size_t>(row + wr)];
+  const std::uint16_t window = windows_[static_cast<std::size_t>(j) * static_cast<std::size_t>(rows_ + 2 * wr) +
+                                        static_cast<std::size_t>(row + wr)];
   if ((window & kNearestMask) == 0) return Visibility::kUnknown;
   const double nearest = 0.01 * (window & kNearestMask);
   if ((window & kSurrounded) && r < nearest - (cfg_.margin_m + cfg_.margin_fraction * r)) return Visibility::kFree;

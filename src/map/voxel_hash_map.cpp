@@ -127,8 +127,8 @@ void VoxelHashMap::removeFarFrom(const Eigen::Vector3d& center, double radius_m)
 }
 
 std::size_t VoxelHashMap::removeIf(const Eigen::Vector3d& center, double radius_m,
-                                  const std::function<bool(const Eigen::Vector3d&)>& remove,
-                                  std::vector<Eigen::Vector3d>* removed_points) {
+                                   const std::function<bool(const Eigen::Vector3d&)>& remove,
+                                   std::vector<Eigen::Vector3d>* removed_points) {
   const double reach = radius_m + std::sqrt(3.0) * voxel_m_;
   std::vector<Voxel*> near;
   for (Voxel& v : voxels_)
@@ -141,8 +141,10 @@ std::size_t VoxelHashMap::removeIf(const Eigen::Vector3d& center, double radius_
     std::uint32_t kept = 0;
     for (std::uint32_t j = 0; j < v.count; ++j) {
       const Eigen::Vector3d& p = points[j];
-      if ((p - center).squaredNorm() <= r2 && remove(p)) removed[i].push_back(p);
-      else points[kept++] = p;
+      if ((p - center).squaredNorm() <= r2 && remove(p))
+        removed[i].push_back(p);
+      else
+        points[kept++] = p;
     }
     if (kept != v.count) v.plane = Voxel::Plane::kStale;
     v.count = kept;
@@ -158,8 +160,7 @@ std::size_t VoxelHashMap::removeIf(const Eigen::Vector3d& center, double radius_
   return total;
 }
 
-int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m,
-                      std::vector<Eigen::Vector3d>* out) const {
+int VoxelHashMap::knn(const Eigen::Vector3d& q, int k, double max_dist_m, std::vector<Eigen::Vector3d>* out) const {
   out->clear();
   if (k <= 0 || voxels_.empty() || max_dist_m <= 0) return 0;
   const double max_d2 = max_dist_m * max_dist_m;

@@ -94,7 +94,8 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const io::RigConf
     // are kept for the clock offset: a full sweep is ~0.7 MB.
     const Stamp imu_now = c.imu.empty() ? 0 : c.imu.back().stamp_ns;
     while (!pending.empty() && pending.front().start_ns + fromSec(0.1 + kTurnMarginS) < imu_now) {
-      if (turningNear(c.imu, pending.front().start_ns, kTurnMarginS, turn_rate)) c.spinning_all.push_back(std::move(pending.front()));
+      if (turningNear(c.imu, pending.front().start_ns, kTurnMarginS, turn_rate))
+        c.spinning_all.push_back(std::move(pending.front()));
       pending.pop_front();
     }
   }
@@ -113,7 +114,8 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const io::RigConf
       acc_mean += s.acc_m_s2;
       ++n;
     }
-  if (n < 10) throw Error("fewer than 10 IMU samples during the first " + fmt(rest_s) + " s of LiDAR data in " + bag_path);
+  if (n < 10)
+    throw Error("fewer than 10 IMU samples during the first " + fmt(rest_s) + " s of LiDAR data in " + bag_path);
   gyro_mean /= n;
   acc_mean /= n;
   // Deviation of 50 ms block means from the window mean: single samples carry the sensor noise
@@ -134,7 +136,8 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const io::RigConf
   }
   if (gyro_dev > opt.max_rest_gyro_rad_s || acc_dev > opt.max_rest_acc_m_s2)
     throw Error("the rig moves during the first " + fmt(rest_s) + " s (gyro deviates by up to " + fmt(gyro_dev) +
-                " rad/s, accelerometer by " + fmt(acc_dev) + " m/s^2): calibration needs it standing still at "
+                " rad/s, accelerometer by " + fmt(acc_dev) +
+                " m/s^2): calibration needs it standing still at "
                 "the start; cut the bag to begin at rest (rosbag filter) or record a still second first");
 
   // ---- spatial ----

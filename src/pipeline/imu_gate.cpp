@@ -10,7 +10,8 @@ bool ImuGate::accept(const ImuSample& s) {
     if (counts_.total() == 0) counts_.first_at_ns = at;
     counts_.last_at_ns = at;
     if ((*count)++ == 0)
-      log::warn("IMU sample at ", log::stampText(s.stamp_ns), " s dropped: ", why, " (further ones are counted in the report)");
+      log::warn("IMU sample at ", log::stampText(s.stamp_ns), " s dropped: ", why,
+                " (further ones are counted in the report)");
     return false;
   };
   if (!s.acc_m_s2.allFinite() || !s.gyro_rad_s.allFinite()) return drop(&counts_.non_finite, "non-finite value");

@@ -35,7 +35,8 @@ bool MappingBackend::plausibleCorrection(const backend::LoopResult& r) const {
   // the graph by tens of metres.
   double path_m = 0.0;
   for (int i = r.match + 1; i <= r.query; ++i)
-    path_m += (graph_.node(i).T_world_body_odom.translation() - graph_.node(i - 1).T_world_body_odom.translation()).norm();
+    path_m +=
+        (graph_.node(i).T_world_body_odom.translation() - graph_.node(i - 1).T_world_body_odom.translation()).norm();
   const Eigen::Isometry3d T_est = graph_.pose(r.match).inverse() * graph_.pose(r.query);
   const double correction_m = (T_est.translation() - r.T_match_query.translation()).norm();
   const double allowed_m = cfg_.max_loop_correction_base_m + cfg_.max_drift_fraction * path_m;
@@ -60,8 +61,8 @@ void MappingBackend::tryLoop(int k) {
     graph_.addLoop(r.match, r.query, r.T_match_query, r.information);
     graph_.optimize();
     const Stamp t0 = graph_.node(0).stamp_ns;  // seconds since the first keyframe: readable
-    loops_.push_back({toSec(graph_.node(r.query).stamp_ns - t0), toSec(graph_.node(r.match).stamp_ns - t0),
-                      r.fitness_m, r.overlap});
+    loops_.push_back(
+        {toSec(graph_.node(r.query).stamp_ns - t0), toSec(graph_.node(r.match).stamp_ns - t0), r.fitness_m, r.overlap});
     log::emit(log::Level::kInfo, "loop closed: keyframe ", r.query, " -> ", r.match, " (fitness ", r.fitness_m,
               " m, overlap ", r.overlap, ")");
   } else if (r.candidates_tried > 0) {
@@ -280,56 +281,57 @@ void MappingBackend::removeGhosts(std::size_t submap) {
   for (auto& lidar_points : submaps_[submap]) {
     std::vector<Point>& points = lidar_points.second;  // a reference the lambda below may capture (C++17)
     std::vector<std::uint8_t> ghost(points.size(), 0), judged(points.size(), 0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 512), [&](const tbb::blocked_range<std::size_t>& r) {
-      // A group's vote on the current point, once asked: the second, full round reuses the first's.
-      enum Vote : std::uint8_t { kNotAsked, kNone, kFree, kHit };
-      std::vector<std::uint8_t> votes(groups.size());
-      for (std::size_t i = r.begin(); i < r.end(); ++i) {
-        const Eigen::Vector3d p = T_world_keyframe * points[i].xyz.cast<double>();
-        if (!nearMoved(p)) continue;
-        std::fill(votes.begin(), votes.end(), kNotAsked);
-        const auto voteOf = [&](const Group& g) {
-          bool view_hit = false;
-          for (std::size_t e = g.begin; e < g.end; ++e) {
-            if ((p - eyes[e].origin).squaredNorm() > r2) continue;
-            const map::Visibility v = eyes[e].image->classify(eyes[e].T_sensor_world * p);
-            if (v == map::Visibility::kFree) return kFree;  // seen through by one of them settles it
-            view_hit = view_hit || v == map::Visibility::kHit;
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, points.size(), 512), [&](const tbb::blocked_range<std::size_t>& r) {
+          // A group's vote on the current point, once asked: the second, full round reuses the first's.
+          enum Vote : std::uint8_t { kNotAsked, kNone, kFree, kHit };
+          std::vector<std::uint8_t> votes(groups.size());
+          for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            const Eigen::Vector3d p = T_world_keyframe * points[i].xyz.cast<double>();
+            if (!nearMoved(p)) continue;
+            std::fill(votes.begin(), votes.end(), kNotAsked);
+            const auto voteOf = [&](const Group& g) {
+              bool view_hit = false;
+              for (std::size_t e = g.begin; e < g.end; ++e) {
+                if ((p - eyes[e].origin).squaredNorm() > r2) continue;
+                const map::Visibility v = eyes[e].image->classify(eyes[e].T_sensor_world * p);
+                if (v == map::Visibility::kFree) return kFree;  // seen through by one of them settles it
+                view_hit = view_hit || v == map::Visibility::kHit;
+              }
+              return view_hit ? kHit : kNone;
+            };
+            // Votes of the keyframes whose index modulo `stride` is `phase` (stride 1: all of them).
+            const auto vote = [&](std::size_t stride, int* free, int* hit) {
+              for (std::size_t g = 0; g < groups.size(); ++g) {
+                if (groups[g].keyframe % stride != submap % stride) continue;
+                if (votes[g] == kNotAsked) votes[g] = voteOf(groups[g]);
+                *free += votes[g] == kFree;
+                *hit += votes[g] == kHit;
+              }
+            };
+            int free = 0, hit = 0;
+            // Nearly every point is static and never seen through: half of the views shows that
+            // (a ghost is seen through by most views once its mover has gone); points some view sees
+            // through, and points that half sees on at most once (it cannot tell), are asked to all.
+            vote(2, &free, &hit);
+            if (free > 0 || hit <= 1) {
+              free = hit = 0;
+              vote(1, &free, &hit);
+            }
+            judged[i] = free + hit > 0;
+            // A ghost is seen through by a fair share of the views that decide on it, not by most:
+            // where people pace, later views also see them (or another) back on the same spot; a
+            // static surface is seen through only by the rare view whose pose or mixed pixel is off.
+            // Where the odometry saw something move in (space earlier views saw empty; kMinMoverReturns
+            // returns, not the odd false detection) one such view is evidence enough; elsewhere it takes
+            // two, so one off view alone never removes a surface.
+            // In such a cell, a point no keyframe's view but at most its own sees there is a ghost too:
+            // nothing confirms a surface in space known to have been free (a walker seen from far off in
+            // a sweep between keyframes, then hidden or out of view).
+            const bool mover_cell = moverReturns(p) >= kMinMoverReturns;
+            ghost[i] = (free >= (mover_cell ? 1 : 2) && 2 * free >= hit) || (mover_cell && free == 0 && hit <= 1);
           }
-          return view_hit ? kHit : kNone;
-        };
-        // Votes of the keyframes whose index modulo `stride` is `phase` (stride 1: all of them).
-        const auto vote = [&](std::size_t stride, int* free, int* hit) {
-          for (std::size_t g = 0; g < groups.size(); ++g) {
-            if (groups[g].keyframe % stride != submap % stride) continue;
-            if (votes[g] == kNotAsked) votes[g] = voteOf(groups[g]);
-            *free += votes[g] == kFree;
-            *hit += votes[g] == kHit;
-          }
-        };
-        int free = 0, hit = 0;
-        // Nearly every point is static and never seen through: half of the views shows that
-        // (a ghost is seen through by most views once its mover has gone); points some view sees
-        // through, and points that half sees on at most once (it cannot tell), are asked to all.
-        vote(2, &free, &hit);
-        if (free > 0 || hit <= 1) {
-          free = hit = 0;
-          vote(1, &free, &hit);
-        }
-        judged[i] = free + hit > 0;
-        // A ghost is seen through by a fair share of the views that decide on it, not by most:
-        // where people pace, later views also see them (or another) back on the same spot; a
-        // static surface is seen through only by the rare view whose pose or mixed pixel is off.
-        // Where the odometry saw something move in (space earlier views saw empty; kMinMoverReturns
-        // returns, not the odd false detection) one such view is evidence enough; elsewhere it takes
-        // two, so one off view alone never removes a surface.
-        // In such a cell, a point no keyframe's view but at most its own sees there is a ghost too:
-        // nothing confirms a surface in space known to have been free (a walker seen from far off in
-        // a sweep between keyframes, then hidden or out of view).
-        const bool mover_cell = moverReturns(p) >= kMinMoverReturns;
-        ghost[i] = (free >= (mover_cell ? 1 : 2) && 2 * free >= hit) || (mover_cell && free == 0 && hit <= 1);
-      }
-    });
+        });
     std::vector<Point> removed;
     std::size_t kept = 0;
     for (std::size_t i = 0; i < points.size(); ++i) {

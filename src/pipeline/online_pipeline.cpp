@@ -11,11 +11,11 @@
 namespace mmlio::pipeline {
 namespace {
 
-constexpr double kMaxScanJumpS = 2.0;       // a scan further after its LiDAR's previous one ...
-constexpr int kScanJumpConfirmations = 3;   // ... is dropped unless this many in a row agree,
-constexpr double kScanRunSpacingS = 1.0;    // ... each within this of the one before
-constexpr double kTimeBaseJumpS = 1.0;      // the IMU resuming this much later, every LiDAR alike ...
-constexpr double kTimeBaseAgreementS = 0.3; // ... within this: the stream's time base jumped
+constexpr double kMaxScanJumpS = 2.0;        // a scan further after its LiDAR's previous one ...
+constexpr int kScanJumpConfirmations = 3;    // ... is dropped unless this many in a row agree,
+constexpr double kScanRunSpacingS = 1.0;     // ... each within this of the one before
+constexpr double kTimeBaseJumpS = 1.0;       // the IMU resuming this much later, every LiDAR alike ...
+constexpr double kTimeBaseAgreementS = 0.3;  // ... within this: the stream's time base jumped
 
 lidar::SweepAligner::Config alignerConfig(const io::RigConfig& cfg, const std::string& mode) {
   lidar::SweepAligner::Config c;
@@ -92,7 +92,8 @@ void OnlinePipeline::addScan(LidarScan scan) {
     if ((*count)++ == 0) log::warn(scan.sensor, " scan dropped: ", why, " (further ones are counted in the report)");
   };
   if (last != last_scan_ns_.end()) {
-    if (scan.start_ns <= last->second) return drop(&scan_drops_.out_of_order, "not after the previous scan of this LiDAR");
+    if (scan.start_ns <= last->second)
+      return drop(&scan_drops_.out_of_order, "not after the previous scan of this LiDAR");
     // A lone stamp far ahead is corrupt; a LiDAR that stays there had a real gap.
     StampJumpGuard& jump = scanJumpGuard(scan.sensor);
     if (jump.jumped(last->second, scan.start_ns) && jump.holdBack(last->second, scan.start_ns))

@@ -36,8 +36,8 @@ void ProgressBar::draw(double fraction, const std::string& status, bool final_li
   const int filled = static_cast<int>(fraction * kWidth + 0.5);
   std::string bar(static_cast<std::size_t>(filled), '#');
   bar.append(static_cast<std::size_t>(kWidth - filled), '.');
-  std::fprintf(stderr, "%s%s [%s] %3.0f%% %s%s", tty_ ? "\r\033[K" : "", label_.c_str(), bar.c_str(),
-               fraction * 100.0, status.c_str(), (final_line || !tty_) ? "\n" : "");
+  std::fprintf(stderr, "%s%s [%s] %3.0f%% %s%s", tty_ ? "\r\033[K" : "", label_.c_str(), bar.c_str(), fraction * 100.0,
+               status.c_str(), (final_line || !tty_) ? "\n" : "");
   std::fflush(stderr);
 }
 

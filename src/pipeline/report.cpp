@@ -12,8 +12,8 @@
 
 namespace mmlio::pipeline {
 
-void plotMapTopView(const std::string& png_path, const std::vector<Point>& map_world,
-                    const Trajectory& trajectory, double slice_half_height_m) {
+void plotMapTopView(const std::string& png_path, const std::vector<Point>& map_world, const Trajectory& trajectory,
+                    double slice_half_height_m) {
   double mean_z = 0.0;
   for (const auto& p : trajectory) mean_z += p.T_world_body.translation().z();
   if (!trajectory.empty()) mean_z /= trajectory.size();
@@ -31,7 +31,8 @@ void plotMapTopView(const std::string& png_path, const std::vector<Point>& map_w
     colors.push_back({g, g, g});
   }
   std::vector<Eigen::Vector2d> path;
-  for (const auto& p : trajectory) path.emplace_back(p.T_world_body.translation().x(), p.T_world_body.translation().y());
+  for (const auto& p : trajectory)
+    path.emplace_back(p.T_world_body.translation().x(), p.T_world_body.translation().y());
 
   eval::Plot2D::Config pc;
   pc.title = "map slice (|z - z_traj| < " + std::to_string(slice_half_height_m).substr(0, 3) + " m) and trajectory";

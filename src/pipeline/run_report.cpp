@@ -139,10 +139,14 @@ Json toJson(const RunReport& r) {
                      {"gyro_bias_rad_s", vec3(r.imu_init.gyro_bias)},
                      {"acc_scale", r.input.imu_acc_scale},
                      {"message", r.imu_init.message}};
-  rep["sweeps"] = {{"processed", r.sweeps.processed}, {"tracked", r.sweeps.tracked},
-                   {"degraded", r.sweeps.degraded},   {"initialising", r.sweeps.initialising},
-                   {"keyframes", r.sweeps.keyframes}, {"degenerate", r.sweeps.degenerate},
-                   {"degraded_fraction", r.sweeps.degraded_fraction}, {"coverage", r.sweeps.coverage}};
+  rep["sweeps"] = {{"processed", r.sweeps.processed},
+                   {"tracked", r.sweeps.tracked},
+                   {"degraded", r.sweeps.degraded},
+                   {"initialising", r.sweeps.initialising},
+                   {"keyframes", r.sweeps.keyframes},
+                   {"degenerate", r.sweeps.degenerate},
+                   {"degraded_fraction", r.sweeps.degraded_fraction},
+                   {"coverage", r.sweeps.coverage}};
   rep["degeneracy"] = r.degeneracy;
 
   Json features = Json::object();

@@ -69,7 +69,8 @@ class CreatedFolder {
 
 RunResult runBag(const RunOptions& options) {
   const io::RigConfig& cfg = options.config;
-  CreatedFolder out_folder(options.out_dir, options.out_dir.empty() ? std::filesystem::path() : checkWritable(options.out_dir));
+  CreatedFolder out_folder(options.out_dir,
+                           options.out_dir.empty() ? std::filesystem::path() : checkWritable(options.out_dir));
   const std::string mode = options.mode.empty() ? cfg.mode : options.mode;
   if (!io::isValidMode(mode)) throw Error("unknown mode '" + mode + "' (expected hvi, vi or hi)");
 
@@ -117,8 +118,10 @@ RunResult runBag(const RunOptions& options) {
       }
     }
     result.interrupted = options.stop && options.stop->load();
-    if (result.interrupted) log::warn("interrupted: writing the trajectory, map and report computed so far");
-    else system.flush();  // an interrupted run's last sweeps may lack IMU: they are left out
+    if (result.interrupted)
+      log::warn("interrupted: writing the trajectory, map and report computed so far");
+    else
+      system.flush();  // an interrupted run's last sweeps may lack IMU: they are left out
   } catch (const Error& e) {
     if (system.odometryTrajectory().empty()) throw;
     result.complete = false;
@@ -153,7 +156,7 @@ RunResult runBag(const RunOptions& options) {
   if (input.scans_out_of_order + input.scans_stamp_jumps > 0)
     log::warn("LiDAR: ", input.scans_out_of_order + input.scans_stamp_jumps, " scans dropped (out of order ",
               input.scans_out_of_order, ", stamp jumps ", input.scans_stamp_jumps, ")");
-  report.status = !result.complete    ? "incomplete: " + result.error
+  report.status = !result.complete     ? "incomplete: " + result.error
                   : result.interrupted ? std::string("interrupted")
                                        : report.inputStatus();
 
@@ -162,9 +165,9 @@ RunResult runBag(const RunOptions& options) {
   if (!poses.empty()) {
     // To the bag's end (its last message, whatever was readable), not just to the last IMU sample read.
     // A run cut by --duration is judged on the span asked for.
-    const Stamp end_ns = options.replays > 1              ? odometry.lastImuNs()
-                         : cut                          ? std::min(source.endNs(), stop_ns)
-                                                        : std::max(odometry.lastImuNs(), source.endNs());
+    const Stamp end_ns = options.replays > 1 ? odometry.lastImuNs()
+                         : cut               ? std::min(source.endNs(), stop_ns)
+                                             : std::max(odometry.lastImuNs(), source.endNs());
     const double span_s = toSec(end_ns - poses.front().stamp_ns);
     // The last sweep may end just past a --duration cut: never more than all of it covered.
     report.sweeps.coverage =
@@ -180,9 +183,10 @@ RunResult runBag(const RunOptions& options) {
       std::snprintf(why, sizeof why, "poses cover %.0f %% of the stream after initialisation (limit %.0f %%)",
                     100.0 * report.sweeps.coverage, 100.0 * (1.0 - limit));
     else if (const double drift = report.degeneracy.value("max_drift_sigma_m", 0.0); drift > options.max_drift_sigma_m)
-      std::snprintf(why, sizeof why,
-                    "the IMU carried the position alone long enough to drift by %.2f m (1 sigma, at %.0f s; limit %.2f m)",
-                    drift, report.degeneracy.value("max_drift_at_s", 0.0), options.max_drift_sigma_m);
+      std::snprintf(
+          why, sizeof why,
+          "the IMU carried the position alone long enough to drift by %.2f m (1 sigma, at %.0f s; limit %.2f m)", drift,
+          report.degeneracy.value("max_drift_at_s", 0.0), options.max_drift_sigma_m);
     result.untrusted = why;
   }
   if (!result.complete) result.untrusted = "the bag ended early: " + result.error;

@@ -22,8 +22,10 @@ void StageStats::add(const StageTimes& times) {
   double total = 0.0;
   bool has_total = false;
   for (const auto& [stage, ms] : times) {
-    if (stage == "total") has_total = true;
-    else total += ms;
+    if (stage == "total")
+      has_total = true;
+    else
+      total += ms;
     if (!samples_.count(stage) && stage != "total") order_.push_back(stage);
     samples_[stage].push_back(ms);
   }

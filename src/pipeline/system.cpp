@@ -29,8 +29,10 @@ void System::onSweep(estimator::SweepResult r) {
     ++sweeps_.initialising;
     return;
   }
-  if (r.status == estimator::SweepResult::Status::kDegraded) ++sweeps_.degraded;
-  else ++sweeps_.tracked;
+  if (r.status == estimator::SweepResult::Status::kDegraded)
+    ++sweeps_.degraded;
+  else
+    ++sweeps_.tracked;
   Stopwatch handoff;
   odometry_poses_.push_back({online_.externalStamp(r.state.stamp_ns), r.state.pose()});
   degeneracy_.add(r);
@@ -50,8 +52,10 @@ void System::onSweep(estimator::SweepResult r) {
   // The back end works on the sweep on its own thread: it takes it, or a copy if an observer (the
   // live node publishing the sweep's points) still needs it.
   if (!finished_) {
-    if (observer_) mapping_.addSweep(r);
-    else mapping_.addSweep(std::move(r));
+    if (observer_)
+      mapping_.addSweep(r);
+    else
+      mapping_.addSweep(std::move(r));
   }
   times.emplace_back("mapping_handoff", handoff.lapMs());
   timing_.add(times);
@@ -63,7 +67,7 @@ void System::finish() {
   if (finished_) return;
   finished_ = true;
   try {
-    mapping_.finish();  // after an early stop too: what was queued still reaches the map
+    mapping_.finish();                 // after an early stop too: what was queued still reaches the map
   } catch (const std::exception& e) {  // a failed back end must not cost the trajectory
     backend_error_ = e.what();
     log::warn("mapping back end failed: ", e.what(), " (odometry trajectory and the map so far are written)");

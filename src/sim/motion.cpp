@@ -173,8 +173,8 @@ PlannedWalk planRecorded(const std::vector<Keyframe>& recorded, const WalkConfig
   PlannedWalk plan;
   plan.move_start_s = config.rest_start_s;
   const double t0 = recorded.front().t_s;
-  const double budget_s = total_duration_s > 0.0 ? total_duration_s - config.rest_start_s - config.rest_end_s
-                                                 : recorded.back().t_s - t0;
+  const double budget_s =
+      total_duration_s > 0.0 ? total_duration_s - config.rest_start_s - config.rest_end_s : recorded.back().t_s - t0;
   for (Keyframe k : recorded) {
     if (!plan.coarse.empty() && k.t_s - t0 > budget_s + 1e-9) break;
     k.t_s += plan.move_start_s - t0;

@@ -9,8 +9,8 @@ namespace mmlio::sim {
 namespace {
 
 constexpr std::uint64_t kPeopleId = 5;
-constexpr double kStepM = 0.25;          // path sampling
-constexpr double kRouteClearanceM = 0.7; // nearest a person comes to the rig's route
+constexpr double kStepM = 0.25;           // path sampling
+constexpr double kRouteClearanceM = 0.7;  // nearest a person comes to the rig's route
 
 bool footprintFree(const Scene& scene, const Eigen::Vector2d& c) {
   const double half = 0.5 * Crowd::kWidth + 0.05;  // either orientation, with a margin
@@ -25,7 +25,8 @@ bool footprintFree(const Scene& scene, const Eigen::Vector2d& c) {
 
 bool clearOfRoute(const std::vector<Eigen::Vector2d>& route, const Eigen::Vector2d& c) {
   const double min_sq = (kRouteClearanceM - 0.05) * (kRouteClearanceM - 0.05);
-  return std::none_of(route.begin(), route.end(), [&](const Eigen::Vector2d& r) { return (r - c).squaredNorm() < min_sq; });
+  return std::none_of(route.begin(), route.end(),
+                      [&](const Eigen::Vector2d& r) { return (r - c).squaredNorm() < min_sq; });
 }
 
 std::vector<Eigen::Vector2d> resampleByArc(const std::vector<Eigen::Vector2d>& route) {
@@ -39,7 +40,8 @@ Person finish(std::vector<Eigen::Vector2d> path, double speed, double phase_unit
   Person p;
   p.path = std::move(path);
   p.arc_m.push_back(0.0);
-  for (std::size_t i = 1; i < p.path.size(); ++i) p.arc_m.push_back(p.arc_m.back() + (p.path[i] - p.path[i - 1]).norm());
+  for (std::size_t i = 1; i < p.path.size(); ++i)
+    p.arc_m.push_back(p.arc_m.back() + (p.path[i] - p.path[i - 1]).norm());
   p.speed_m_s = speed;
   p.phase_m = phase_unit * 2.0 * p.arc_m.back();
   p.crosser = crosser;

@@ -419,9 +419,9 @@ Scenario lab() {
     b.add(x + 0.6, y0 + 0.1, 0.92, x + 1.1, y0 + 0.5, 1.3, 40);
   }
   b.add(x0, -1.5, 0, x0 + 0.45, 2.5, 2.1, 170);  // shelves on the west wall
-  b.add(x1 - 0.6, -2.6, 0, x1, -1.2, 1.8, 110);   // a cabinet and a whiteboard on the east wall
+  b.add(x1 - 0.6, -2.6, 0, x1, -1.2, 1.8, 110);  // a cabinet and a whiteboard on the east wall
   b.add(x1 - 0.03, 0.2, 0.9, x1, 2.4, 2.0, 240);
-  b.add(0.5, y1 - 0.6, 0, 5.5, y1, 1.9, 130);  // tall shelves on the north wall
+  b.add(0.5, y1 - 0.6, 0, 5.5, y1, 1.9, 130);                                    // tall shelves on the north wall
   for (double x : {2.0, 6.5}) b.add(x - 0.25, 2.75, 0, x + 0.25, 3.25, H, 160);  // pillars
   for (double x : {-1.5, 2.5, 6.5, 10.0}) b.add(x, 0.4, H - 0.06, x + 1.2, 0.7, H, 250);
   b.add(4.5, y0, H - 0.4, 4.8, y1, H, 150);  // a beam
@@ -441,7 +441,7 @@ Scenario lab() {
   Lcg rng{777};
   addClutter(b, rng, 12, x0 + 0.5, x1 - 0.7, y0 + 0.9, y1 - 0.7, s.waypoints, 0.7, 1.0, 1.4);
   s.boxes = b.boxes;
-  s.walk.height_m = 0.7;  // a platform's LiDARs, not a person's
+  s.walk.height_m = 0.7;         // a platform's LiDARs, not a person's
   s.walk.bob_amplitude_m = 0.0;  // the recorded motion carries the platform's own
   s.walk.sway_rad = 0.0;
   s.walk.nod_rad = 0.0;

@@ -50,7 +50,8 @@ Simulator::Simulator(SimOptions options) : options_(std::move(options)) {
   imu_.reserve(n);
   true_bias_.reserve(n);
   auto noise = [&](int k, int channel) {
-    return normalFromKey(hashKey(options_.seed, kImuId, static_cast<std::uint64_t>(k), static_cast<std::uint64_t>(channel)));
+    return normalFromKey(
+        hashKey(options_.seed, kImuId, static_cast<std::uint64_t>(k), static_cast<std::uint64_t>(channel)));
   };
   for (int k = 0; k < n; ++k) {
     const Stamp stamp = kSimStartNs + k * dt_ns;
@@ -158,9 +159,9 @@ LidarExtrinsic Simulator::livoxExtrinsic() const {
 
 LidarScan Simulator::velodyneSweep(int k, std::vector<std::uint8_t>* on_person) const {
   if (k < 0 || k >= numVelodyneSweeps()) throw Error("velodyne sweep index " + std::to_string(k) + " out of range");
-  LidarScan scan = cast(velodyne_beams_, velodyneTrueStartNs(k), velodyneExtrinsic().T_imu_sensor,
-                        velodyne_.range_noise_m, velodyne_.min_range_m, velodyne_.max_range_m, kVelodyneId, k, false,
-                        on_person);
+  LidarScan scan =
+      cast(velodyne_beams_, velodyneTrueStartNs(k), velodyneExtrinsic().T_imu_sensor, velodyne_.range_noise_m,
+           velodyne_.min_range_m, velodyne_.max_range_m, kVelodyneId, k, false, on_person);
   scan.sensor = "velodyne";
   scan.start_ns -= fromSec(options_.velodyne_time_offset_s);
   return scan;
@@ -168,16 +169,16 @@ LidarScan Simulator::velodyneSweep(int k, std::vector<std::uint8_t>* on_person) 
 
 LidarScan Simulator::livoxFrame(int k, std::vector<std::uint8_t>* on_person) const {
   if (k < 0 || k >= numLivoxFrames()) throw Error("livox frame index " + std::to_string(k) + " out of range");
-  LidarScan scan = cast(livoxBeams(livox_, k), kSimStartNs + k * kFramePeriodNs, livoxExtrinsic().T_imu_sensor,
-                        livox_.range_noise_m, livox_.min_range_m, livox_.max_range_m, kLivoxId, k,
-                        options_.livox_no_returns_as_zero, on_person);
+  LidarScan scan =
+      cast(livoxBeams(livox_, k), kSimStartNs + k * kFramePeriodNs, livoxExtrinsic().T_imu_sensor, livox_.range_noise_m,
+           livox_.min_range_m, livox_.max_range_m, kLivoxId, k, options_.livox_no_returns_as_zero, on_person);
   scan.sensor = "livox";
   return scan;
 }
 
 LidarScan Simulator::cast(const std::vector<Beam>& beams, Stamp true_start_ns, const Eigen::Isometry3d& T_imu_sensor,
-                          double range_noise_m, double min_range_m, double max_range_m, std::uint64_t sensor_id,
-                          int k, bool keep_no_returns, std::vector<std::uint8_t>* on_person) const {
+                          double range_noise_m, double min_range_m, double max_range_m, std::uint64_t sensor_id, int k,
+                          bool keep_no_returns, std::vector<std::uint8_t>* on_person) const {
   std::vector<Point> points(beams.size());
   std::vector<char> valid(beams.size(), 0);
   std::vector<std::uint8_t> person(beams.size(), 0);
@@ -200,9 +201,10 @@ LidarScan Simulator::cast(const std::vector<Beam>& beams, Stamp true_start_ns, c
           person[i] = 1;
         }
       }
-      const double range = hit.box < 0 ? 0.0
-                                       : hit.range_m + range_noise_m * normalFromKey(hashKey(options_.seed, sensor_id,
-                                                                                             static_cast<std::uint64_t>(k), i));
+      const double range = hit.box < 0
+                               ? 0.0
+                               : hit.range_m + range_noise_m * normalFromKey(hashKey(options_.seed, sensor_id,
+                                                                                     static_cast<std::uint64_t>(k), i));
       if (hit.box < 0 || range < min_range_m || range > max_range_m) {
         person[i] = 0;
         if (keep_no_returns) {  // the driver's no-return point: (0,0,0) with its time

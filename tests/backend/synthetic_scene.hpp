@@ -46,9 +46,9 @@ inline std::vector<Eigen::Vector3d> scan(const Scene& scene, const Eigen::Isomet
 /// Walls (0.2 m thick), floor and ceiling of a room [x0,x1] x [y0,y1] x [0,h].
 inline void addRoomShell(Scene& s, double x0, double x1, double y0, double y1, double h) {
   const double w = 0.2;
-  s.push_back({{x0 - w, y0 - w, -w}, {x1 + w, y1 + w, 0}});      // floor
-  s.push_back({{x0 - w, y0 - w, h}, {x1 + w, y1 + w, h + w}});   // ceiling
-  s.push_back({{x0 - w, y0 - w, 0}, {x0, y1 + w, h}});           // walls
+  s.push_back({{x0 - w, y0 - w, -w}, {x1 + w, y1 + w, 0}});     // floor
+  s.push_back({{x0 - w, y0 - w, h}, {x1 + w, y1 + w, h + w}});  // ceiling
+  s.push_back({{x0 - w, y0 - w, 0}, {x0, y1 + w, h}});          // walls
   s.push_back({{x1, y0 - w, 0}, {x1 + w, y1 + w, h}});
   s.push_back({{x0, y0 - w, 0}, {x1, y0, h}});
   s.push_back({{x0, y1, 0}, {x1, y1 + w, h}});

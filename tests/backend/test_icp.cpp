@@ -64,7 +64,8 @@ TEST(PointToPlaneIcp, FlagsAFeaturelessCorridorAsDegenerateAlongItsAxis) {
   const IcpResult r = alignPointToPlane(cloud_b, target, Eigen::Isometry3d::Identity());
   ASSERT_TRUE(r.converged);
   std::printf("corridor: min eig %.4f along (%.2f %.2f %.2f)\n", r.min_translation_eigenvalue,
-              r.weakest_translation_direction.x(), r.weakest_translation_direction.y(), r.weakest_translation_direction.z());
+              r.weakest_translation_direction.x(), r.weakest_translation_direction.y(),
+              r.weakest_translation_direction.z());
   EXPECT_LT(r.min_translation_eigenvalue, 0.03);  // the room above: ~0.1
   EXPECT_GT(std::abs(r.weakest_translation_direction.x()), 0.99);
 }

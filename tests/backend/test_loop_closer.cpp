@@ -66,7 +66,8 @@ TEST(LoopCloser, RejectsACandidateInADifferentRoom) {
   const Eigen::Isometry3d T0 = pose(-2.0, 1.0, 1.0, 0.3);
   PoseGraph graph;
   graph.addKeyframe(keyframe(0.0, T0, testing::scan(testing::roomA(), T0, 20)));
-  const int q = graph.addKeyframe(keyframe(40.0, T0 * pose(1.0, 0, 0, 0), testing::scan(testing::roomB(), pose(0.5, 0.3, 1.0, 0.2), 21)));
+  const int q = graph.addKeyframe(
+      keyframe(40.0, T0 * pose(1.0, 0, 0, 0), testing::scan(testing::roomB(), pose(0.5, 0.3, 1.0, 0.2), 21)));
   const LoopResult r = LoopCloser(LoopCloser::Config{}).detect(graph, q);
   report("different room", r);
   EXPECT_FALSE(r.accepted);
@@ -101,7 +102,8 @@ TEST(LoopCloser, RejectsAFeaturelessCorridorAtItsPriorAsTheFullCheckWould) {
   const Eigen::Isometry3d T1 = pose(0.5, 0.1, 1.0, 2 * kDeg);
   PoseGraph graph;
   graph.addKeyframe(keyframe(0.0, T0, testing::scan(scene, T0, 50, 0.01, 20.0)));
-  const int q = graph.addKeyframe(keyframe(40.0, T1 * pose(0.1, 0.05, 0, 0.5 * kDeg), testing::scan(scene, T1, 51, 0.01, 20.0)));
+  const int q =
+      graph.addKeyframe(keyframe(40.0, T1 * pose(0.1, 0.05, 0, 0.5 * kDeg), testing::scan(scene, T1, 51, 0.01, 20.0)));
   const LoopResult early = LoopCloser(LoopCloser::Config{}).detect(graph, q);
   report("plain corridor", early);
   EXPECT_FALSE(early.accepted);

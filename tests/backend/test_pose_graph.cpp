@@ -63,8 +63,8 @@ TEST(PoseGraph, SquareLoopWithYawDriftClosesToUnderOneCentimetreAfterTheLoopEdge
   const int last = static_cast<int>(graph.size()) - 1;
 
   const Eigen::Isometry3d T_last_first_true = gt[last].inverse() * gt[0];
-  const double before_m = ((graph.pose(last).inverse() * graph.pose(0)).translation() -
-                           T_last_first_true.translation()).norm();
+  const double before_m =
+      ((graph.pose(last).inverse() * graph.pose(0)).translation() - T_last_first_true.translation()).norm();
   EXPECT_GT(before_m, 0.4);  // the drift is real
   std::printf("end-to-start error before the loop: %.3f m\n", before_m);
 
@@ -165,8 +165,8 @@ TEST(PoseGraph, ALoopClosingVerticalDriftMovesHeightsNotTilt) {
   double tilt_with = 0, end_with = 0, tilt_without = 0, end_without = 0;
   solve(0.003, &tilt_with, &end_with);
   solve(0.0, &tilt_without, &end_without);
-  std::printf("worst tilt with the factor %.2f mrad (end %.3f m), without %.2f mrad (end %.3f m)\n",
-              1e3 * tilt_with, end_with, 1e3 * tilt_without, end_without);
+  std::printf("worst tilt with the factor %.2f mrad (end %.3f m), without %.2f mrad (end %.3f m)\n", 1e3 * tilt_with,
+              end_with, 1e3 * tilt_without, end_without);
   EXPECT_LT(end_with, 0.05);
   EXPECT_LT(tilt_with, 0.003);
   EXPECT_GT(tilt_without, 3.0 * tilt_with);

@@ -32,14 +32,14 @@ inline Scene office() {
   s.push_back({{x1, y0 - w, 0}, {x1 + w, y1 + w, h}});
   s.push_back({{x0, y0 - w, 0}, {x1, y0, h}});
   s.push_back({{x0, y1, 0}, {x1, y1 + w, h}});
-  s.push_back({{2.0, -1.0, 0}, {3.5, 0.2, 0.75}});    // desk ahead
-  s.push_back({{4.5, 1.0, 0}, {5.9, 2.2, 1.9}});      // cabinet ahead left
-  s.push_back({{1.0, 2.5, 0}, {1.5, 3.0, 3.0}});      // pillar
-  s.push_back({{-3.0, -2.5, 0}, {-1.5, -1.2, 0.9}});  // desk behind
-  s.push_back({{-3.9, 1.0, 0}, {-3.3, 3.5, 2.0}});    // shelf behind
-  s.push_back({{3.0, -2.9, 0}, {3.6, -2.3, 1.2}});    // box ahead right
-  s.push_back({{5.0, -2.0, 1.2}, {5.95, -1.0, 1.6}}); // wall-mounted box
-  s.push_back({{-1.0, 3.5, 1.0}, {0.5, 3.95, 2.2}});  // whiteboard frame
+  s.push_back({{2.0, -1.0, 0}, {3.5, 0.2, 0.75}});     // desk ahead
+  s.push_back({{4.5, 1.0, 0}, {5.9, 2.2, 1.9}});       // cabinet ahead left
+  s.push_back({{1.0, 2.5, 0}, {1.5, 3.0, 3.0}});       // pillar
+  s.push_back({{-3.0, -2.5, 0}, {-1.5, -1.2, 0.9}});   // desk behind
+  s.push_back({{-3.9, 1.0, 0}, {-3.3, 3.5, 2.0}});     // shelf behind
+  s.push_back({{3.0, -2.9, 0}, {3.6, -2.3, 1.2}});     // box ahead right
+  s.push_back({{5.0, -2.0, 1.2}, {5.95, -1.0, 1.6}});  // wall-mounted box
+  s.push_back({{-1.0, 3.5, 1.0}, {0.5, 3.95, 2.2}});   // whiteboard frame
   return s;
 }
 
@@ -70,8 +70,8 @@ inline LidarScan spinningSweep(const Scene& s, const Eigen::Isometry3d& T_world_
 }
 
 /// Random directions inside an 81.7 x 25.1 deg field of view around +x.
-inline LidarScan solidFrame(const Scene& s, const Eigen::Isometry3d& T_world_sensor, unsigned seed, double noise_m = 0.0,
-                            int n = 12000) {
+inline LidarScan solidFrame(const Scene& s, const Eigen::Isometry3d& T_world_sensor, unsigned seed,
+                            double noise_m = 0.0, int n = 12000) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> noise(0.0, 1.0);
   std::uniform_real_distribution<double> u(-0.5, 0.5);

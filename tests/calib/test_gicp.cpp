@@ -20,8 +20,8 @@ TEST(Gicp, RecoversAKnownTransformBetweenTwoNoiselessScansOfARoom) {
   const GicpResult r = gicp(source, target, Eigen::Isometry3d::Identity());
   ASSERT_TRUE(r.converged);
   const Eigen::Isometry3d err = T_a_b.inverse() * r.T_target_source;
-  std::printf("GICP noiseless: %.5f m %.5f deg, fitness %.4f m, overlap %.3f, %d iterations\n", err.translation().norm(),
-              angleDeg(err), r.fitness_m, r.overlap, r.iterations);
+  std::printf("GICP noiseless: %.5f m %.5f deg, fitness %.4f m, overlap %.3f, %d iterations\n",
+              err.translation().norm(), angleDeg(err), r.fitness_m, r.overlap, r.iterations);
   EXPECT_LT(err.translation().norm(), 1e-3);
   EXPECT_LT(angleDeg(err), 0.01);
   EXPECT_GT(r.overlap, 0.8);
@@ -37,8 +37,8 @@ TEST(Gicp, StaysWithinACentimetreWithOneCentimetreRangeNoise) {
   const GicpResult r = gicp(source, target, Eigen::Isometry3d::Identity());
   ASSERT_TRUE(r.converged);
   const Eigen::Isometry3d err = T_a_b.inverse() * r.T_target_source;
-  std::printf("GICP 1 cm noise: %.5f m %.5f deg, fitness %.4f m, overlap %.3f\n", err.translation().norm(), angleDeg(err),
-              r.fitness_m, r.overlap);
+  std::printf("GICP 1 cm noise: %.5f m %.5f deg, fitness %.4f m, overlap %.3f\n", err.translation().norm(),
+              angleDeg(err), r.fitness_m, r.overlap);
   EXPECT_LT(err.translation().norm(), 0.01);
   EXPECT_LT(angleDeg(err), 0.1);
   EXPECT_LT(r.fitness_m, 0.05);

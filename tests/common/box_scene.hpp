@@ -20,9 +20,10 @@ using Scene = std::vector<Box>;
 /// R = Rz(yaw) Ry(pitch) Rx(roll), angles in rad.
 inline Eigen::Isometry3d pose(double x, double y, double z, double yaw_rad, double pitch_rad = 0, double roll_rad = 0) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = (Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitY()) *
-                Eigen::AngleAxisd(roll_rad, Eigen::Vector3d::UnitX()))
-                   .toRotationMatrix();
+  T.linear() =
+      (Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitY()) *
+       Eigen::AngleAxisd(roll_rad, Eigen::Vector3d::UnitX()))
+          .toRotationMatrix();
   T.translation() = Eigen::Vector3d(x, y, z);
   return T;
 }

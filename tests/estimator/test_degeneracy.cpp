@@ -45,8 +45,8 @@ std::vector<MapMatch> endWall(int points, std::uint8_t source = 0) {
 }
 
 TEST(Degeneracy, ACorridorLeavesItsAxisUnobservedAndNamesIt) {
-  const Degeneracy d = analyseDegeneracy(matchInformation(corridorMatches(), Eigen::Isometry3d::Identity(), 0.1),
-                                         DegeneracyConfig());
+  const Degeneracy d =
+      analyseDegeneracy(matchInformation(corridorMatches(), Eigen::Isometry3d::Identity(), 0.1), DegeneracyConfig());
   EXPECT_TRUE(d.translation_degenerate);
   EXPECT_LT(d.translation_points, 1e-6);
   EXPECT_GT(std::abs(d.weak_translation.x()), 0.999);
@@ -59,8 +59,10 @@ TEST(Degeneracy, AFarEndWallMakesTheAxisObservedInProportionToItsPoints) {
   std::vector<MapMatch> few = corridorMatches(), many = corridorMatches();
   for (const MapMatch& m : endWall(10)) few.push_back(m);
   for (const MapMatch& m : endWall(80)) many.push_back(m);
-  const Degeneracy d_few = analyseDegeneracy(matchInformation(few, Eigen::Isometry3d::Identity(), 0.1), DegeneracyConfig());
-  const Degeneracy d_many = analyseDegeneracy(matchInformation(many, Eigen::Isometry3d::Identity(), 0.1), DegeneracyConfig());
+  const Degeneracy d_few =
+      analyseDegeneracy(matchInformation(few, Eigen::Isometry3d::Identity(), 0.1), DegeneracyConfig());
+  const Degeneracy d_many =
+      analyseDegeneracy(matchInformation(many, Eigen::Isometry3d::Identity(), 0.1), DegeneracyConfig());
   EXPECT_NEAR(d_few.translation_points, 10.0, 1.0);  // an end wall point is worth one point along x
   EXPECT_TRUE(d_few.translation_degenerate);
   EXPECT_NEAR(d_many.translation_points, 80.0, 8.0);
@@ -80,8 +82,8 @@ TEST(Degeneracy, OutliersAndOtherLidarsAreLeftOutOfALidarsInformation) {
 }
 
 TEST(Degeneracy, RemappingKeepsThePredictionAlongTheWeakAxisAndTheSolutionAcrossIt) {
-  const Degeneracy d = analyseDegeneracy(matchInformation(corridorMatches(), Eigen::Isometry3d::Identity(), 0.1),
-                                         DegeneracyConfig());
+  const Degeneracy d =
+      analyseDegeneracy(matchInformation(corridorMatches(), Eigen::Isometry3d::Identity(), 0.1), DegeneracyConfig());
   const Eigen::Vector3d p_pred(1.0, 0.0, 0.0), v_pred(1.0, 0.0, 0.0);
   const Eigen::Quaterniond q_pred = Eigen::Quaterniond::Identity();
   Eigen::Vector3d p(0.9, 0.05, -0.02), v(0.8, 0.1, 0.0);
@@ -89,7 +91,7 @@ TEST(Degeneracy, RemappingKeepsThePredictionAlongTheWeakAxisAndTheSolutionAcross
   const Eigen::Quaterniond q_solved = q;
   const int n = remapDegenerateDirections(d, DegeneracyConfig(), p_pred, q_pred, v_pred, &p, &q, &v);
   EXPECT_EQ(n, 1);
-  EXPECT_NEAR(p.x(), 1.0, 1e-9);  // along the corridor: the IMU's prediction
+  EXPECT_NEAR(p.x(), 1.0, 1e-9);   // along the corridor: the IMU's prediction
   EXPECT_NEAR(p.y(), 0.05, 1e-9);  // across: the LiDARs' solution
   EXPECT_NEAR(p.z(), -0.02, 1e-9);
   EXPECT_NEAR(v.x(), 1.0, 1e-9);
@@ -109,7 +111,8 @@ TEST(PredictionDrift, GrowsWhereUnobservedAndShrinksOnlyAlongWhatTheLidarsObserv
   EXPECT_NEAR(drift.positionCovariance()(0, 1), 0.0, 1e-12);
 
   std::vector<MapMatch> wall = endWall(400);  // a wall across x: x observed, y and z not
-  const Degeneracy d = analyseDegeneracy(matchInformation(wall, Eigen::Isometry3d::Identity(), 0.1), DegeneracyConfig());
+  const Degeneracy d =
+      analyseDegeneracy(matchInformation(wall, Eigen::Isometry3d::Identity(), 0.1), DegeneracyConfig());
   drift.update(d, 0.05);
   EXPECT_LT(drift.positionCovariance()(0, 0), 0.05 * 0.05 / 300.0);
   EXPECT_NEAR(drift.positionCovariance()(1, 1), expected, 1e-3 * expected);
@@ -133,9 +136,9 @@ TEST(Degeneracy, WeakEvidenceCountsOnceThePredictionHasDrifted) {
   const Degeneracy d = analyseDegeneracy(info, DegeneracyConfig(), &drifted, sigma);
   EXPECT_FALSE(d.translation_degenerate);
   EXPECT_LE(d.translation_thresholds(0), 10.0);
-  EXPECT_TRUE(analyseDegeneracy(matchInformation(five, Eigen::Isometry3d::Identity(), 0.1), DegeneracyConfig(),
-                                &drifted, sigma)
-                  .translation_degenerate);
+  EXPECT_TRUE(
+      analyseDegeneracy(matchInformation(five, Eigen::Isometry3d::Identity(), 0.1), DegeneracyConfig(), &drifted, sigma)
+          .translation_degenerate);
   // Without any evidence along the axis, the drifted prediction is still all there is.
   const Degeneracy none = analyseDegeneracy(matchInformation(corridorMatches(), Eigen::Isometry3d::Identity(), 0.1),
                                             DegeneracyConfig(), &drifted, sigma);

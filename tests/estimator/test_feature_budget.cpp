@@ -53,7 +53,8 @@ TEST(FeatureBudget, ALargeSceneIsThinnedEvenlyToTheBudgetWithItsSources) {
   // Evenly over space: every 4 x 4 m tile of the floor and of the wall keeps features, so no
   // part of the scene (and no direction it constrains) is dropped.
   std::set<std::tuple<int, int, int>> tiles;
-  for (const auto& p : t.planes) tiles.insert({p.z() == 0.0 ? 0 : 1, static_cast<int>(p.x() / 4 + p.z() / 4), static_cast<int>(p.y() / 4)});
+  for (const auto& p : t.planes)
+    tiles.insert({p.z() == 0.0 ? 0 : 1, static_cast<int>(p.x() / 4 + p.z() / 4), static_cast<int>(p.y() / 4)});
   EXPECT_EQ(tiles.size(), 100u + 20u);
   const auto wall = std::count(t.plane_source.begin(), t.plane_source.end(), 1);
   EXPECT_GT(wall, 0.08 * t.planes.size()) << "the wall keeps about its share of the area (13 %)";

@@ -49,7 +49,8 @@ Blocks toBlocks(const NavState& i, const NavState& j) {
 void posePlus(const double* x, const double* delta, double* out) {
   Eigen::Map<Eigen::Vector3d>{out} = Eigen::Map<const Eigen::Vector3d>(x) + Eigen::Map<const Eigen::Vector3d>(delta);
   Eigen::Map<Eigen::Quaterniond>{out + 3} =
-      (Eigen::Map<const Eigen::Quaterniond>(x + 3) * so3::exp(Eigen::Map<const Eigen::Vector3d>(delta + 3))).normalized();
+      (Eigen::Map<const Eigen::Quaterniond>(x + 3) * so3::exp(Eigen::Map<const Eigen::Vector3d>(delta + 3)))
+          .normalized();
 }
 
 NavState someStateI() {

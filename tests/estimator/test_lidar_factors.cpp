@@ -268,8 +268,13 @@ TEST(LidarFactors, RegistrationRecoversAKnownSixDofPerturbation) {
   // (3,-2) where the two walls meet, horizontal line along y at x=3, z=1.5).
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> U(-4.0, 4.0);
-  struct PlaneObs { Eigen::Vector3d p_world, n; double d; };
-  struct EdgeObs { Eigen::Vector3d p_world, a, u; };
+  struct PlaneObs {
+    Eigen::Vector3d p_world, n;
+    double d;
+  };
+  struct EdgeObs {
+    Eigen::Vector3d p_world, a, u;
+  };
   std::vector<PlaneObs> planes;
   std::vector<EdgeObs> edges;
   for (int i = 0; i < 60; ++i) {

@@ -30,8 +30,7 @@ class LinearFactor : public ceres::CostFunction {
     r = -b_;
     for (std::size_t k = 0; k < A_.size(); ++k) {
       r += A_[k] * Eigen::Map<const Eigen::VectorXd>(x[k], A_[k].cols());
-      if (jacobians && jacobians[k])
-        Eigen::Map<RowMatrix>(jacobians[k], A_[k].rows(), A_[k].cols()) = A_[k];
+      if (jacobians && jacobians[k]) Eigen::Map<RowMatrix>(jacobians[k], A_[k].rows(), A_[k].cols()) = A_[k];
     }
     return true;
   }
@@ -45,7 +44,11 @@ class LinearFactor : public ceres::CostFunction {
 /// `touches[f]` with random 6-row Jacobians (prior factors: as many rows as the block).
 struct LinearProblem {
   std::vector<int> sizes;
-  struct F { std::vector<int> blocks; std::vector<Eigen::MatrixXd> A; Eigen::VectorXd b; };
+  struct F {
+    std::vector<int> blocks;
+    std::vector<Eigen::MatrixXd> A;
+    Eigen::VectorXd b;
+  };
   std::vector<F> factors;
 
   LinearProblem(std::vector<int> block_sizes, const std::vector<std::vector<int>>& touches, unsigned seed)
@@ -330,9 +333,17 @@ struct PoseChain {
   // Truth: three poses; x0 and x2 see a room corner (3 planes), relative measurements are noisy.
   std::vector<Pose> truth = {makePose({0, 0, 0}, {0, 0, 0}), makePose({1.0, 0.2, 0.0}, {0.02, -0.01, 0.3}),
                              makePose({2.0, 0.5, 0.1}, {0.03, 0.02, 0.6})};
-  struct Plane { int pose; Eigen::Vector3d p_body, n; double d; };
+  struct Plane {
+    int pose;
+    Eigen::Vector3d p_body, n;
+    double d;
+  };
   std::vector<Plane> planes;
-  struct Rel { int a, b; Eigen::Vector3d dp; Eigen::Quaterniond dq; };
+  struct Rel {
+    int a, b;
+    Eigen::Vector3d dp;
+    Eigen::Quaterniond dq;
+  };
   std::vector<Rel> rels;
 
   PoseChain() {
@@ -345,7 +356,8 @@ struct PoseChain {
         const Eigen::Vector3d pts[3] = {{5.0, U(rng), U(rng)}, {U(rng), -4.0, U(rng)}, {U(rng), U(rng), -1.5}};
         const Eigen::Vector3d ns[3] = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()};
         const double ds[3] = {-5.0, 4.0, 1.5};
-        for (int j = 0; j < 3; ++j) planes.push_back({k, T_body_world * pts[j] + Eigen::Vector3d(N(rng), N(rng), N(rng)), ns[j], ds[j]});
+        for (int j = 0; j < 3; ++j)
+          planes.push_back({k, T_body_world * pts[j] + Eigen::Vector3d(N(rng), N(rng), N(rng)), ns[j], ds[j]});
       }
     }
     for (auto [a, b] : {std::pair{0, 1}, std::pair{1, 2}, std::pair{0, 2}}) {
@@ -398,7 +410,8 @@ TEST(Marginalization, PoseChainPriorLinearisedAtTheOptimumKeepsTheOptimum) {
   // The prior factor's Jacobians are exact also away from x0 (Jr^-1 of the rotation offset).
   {
     MarginalizationFactor prior(info);
-    const std::vector<Pose> away = {makePose({1.1, 0.1, 0.2}, {0.3, -0.2, 0.5}), makePose({2.2, 0.3, 0.0}, {-0.2, 0.4, 0.9})};
+    const std::vector<Pose> away = {makePose({1.1, 0.1, 0.2}, {0.3, -0.2, 0.5}),
+                                    makePose({2.2, 0.3, 0.0}, {-0.2, 0.4, 0.9})};
     for (int k : {0, 1}) {
       const RowMatrix Ja = analyticJacobian(prior, away, k);
       EXPECT_LT((Ja.leftCols(6) - numericJacobian(prior, away, k)).norm(), 1e-5 * (1 + Ja.norm()));

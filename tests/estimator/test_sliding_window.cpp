@@ -58,7 +58,8 @@ class WindowOnSimulation : public ::testing::Test {
     const Eigen::Isometry3d T_imu_sensor = sim_.velodyneExtrinsic().T_imu_sensor;
     lidar::deskewToEnd(scan, T_imu_sensor, lidar::SweepMotion(times, poses), 0.1);
     std::vector<Eigen::Vector3d> out;
-    for (const Point& p : lidar::voxelDownsample(scan.points, leaf_m)) out.push_back(T_imu_sensor * p.xyz.cast<double>());
+    for (const Point& p : lidar::voxelDownsample(scan.points, leaf_m))
+      out.push_back(T_imu_sensor * p.xyz.cast<double>());
     return out;
   }
 
@@ -107,7 +108,8 @@ TEST_F(WindowOnSimulation, ConvergesFromAPerturbedStart) {
   const std::vector<int> sweeps{60, 70, 80, 90};  // 1 s apart, walking
   for (std::size_t i = 0; i < sweeps.size(); ++i) {
     // The oldest keyframe is the gauge (held fixed without a prior): it starts at the truth.
-    const NavState initial = i == 0 ? sim_.trueState(endNs(sweeps[0])) : perturbed(endNs(sweeps[i]), static_cast<int>(i));
+    const NavState initial =
+        i == 0 ? sim_.trueState(endNs(sweeps[0])) : perturbed(endNs(sweeps[i]), static_cast<int>(i));
     window.push(keyframe(sweeps[i], i == 0 ? -1 : sweeps[i - 1], initial));
   }
   const Errors before = errorOf(window.back());
@@ -115,7 +117,8 @@ TEST_F(WindowOnSimulation, ConvergesFromAPerturbedStart) {
   for (int round = 0; round < 3; ++round) window.optimize(edge_map_, plane_map_);  // re-matching each time
   for (std::size_t i = 1; i < window.size(); ++i) {
     const Errors e = errorOf(window.at(i));
-    std::printf("keyframe %zu: %.4f m %.4f deg %.4f m/s\n", i, e.position_m, e.rotation_rad * 180 / M_PI, e.velocity_m_s);
+    std::printf("keyframe %zu: %.4f m %.4f deg %.4f m/s\n", i, e.position_m, e.rotation_rad * 180 / M_PI,
+                e.velocity_m_s);
     EXPECT_LT(e.position_m, kMaxPositionErrorM) << i;
     EXPECT_LT(e.rotation_rad, kMaxRotationErrorRad) << i;
     EXPECT_LT(e.velocity_m_s, kMaxVelocityErrorMS) << i;
@@ -128,7 +131,8 @@ TEST_F(WindowOnSimulation, MarginalisationPriorKeepsTheWindowOnTrackAfterItSlide
   SlidingWindow window(cfg, g_);
   const std::vector<int> sweeps{60, 70, 80, 90, 100};
   for (std::size_t i = 0; i < sweeps.size(); ++i) {
-    const NavState initial = i == 0 ? sim_.trueState(endNs(sweeps[0])) : perturbed(endNs(sweeps[i]), static_cast<int>(i));
+    const NavState initial =
+        i == 0 ? sim_.trueState(endNs(sweeps[0])) : perturbed(endNs(sweeps[i]), static_cast<int>(i));
     window.push(keyframe(sweeps[i], i == 0 ? -1 : sweeps[i - 1], initial));
     window.optimize(edge_map_, plane_map_);
     window.optimize(edge_map_, plane_map_);
@@ -139,7 +143,8 @@ TEST_F(WindowOnSimulation, MarginalisationPriorKeepsTheWindowOnTrackAfterItSlide
   EXPECT_EQ(window.at(0).stamp, endNs(80));
   for (std::size_t i = 0; i < window.size(); ++i) {
     const Errors e = errorOf(window.at(i));
-    std::printf("keyframe %zu: %.4f m %.4f deg %.4f m/s\n", i, e.position_m, e.rotation_rad * 180 / M_PI, e.velocity_m_s);
+    std::printf("keyframe %zu: %.4f m %.4f deg %.4f m/s\n", i, e.position_m, e.rotation_rad * 180 / M_PI,
+                e.velocity_m_s);
     EXPECT_LT(e.position_m, kMaxPositionErrorM) << i;
     EXPECT_LT(e.rotation_rad, kMaxRotationErrorRad) << i;
     EXPECT_LT(e.velocity_m_s, kMaxVelocityErrorMS) << i;

@@ -21,8 +21,7 @@ Eigen::Isometry3d pose(const Eigen::Vector3d& p, const Eigen::Quaterniond& q = E
 }
 
 /// Samples `f(t)` (t in seconds since kStart) at `rate_hz` over [t0, t1].
-template <typename F>
-Trajectory sample(F f, double rate_hz, double t0_s, double t1_s) {
+template <typename F> Trajectory sample(F f, double rate_hz, double t0_s, double t1_s) {
   Trajectory out;
   const int n = static_cast<int>(std::floor((t1_s - t0_s) * rate_hz + 1e-9));
   for (int i = 0; i <= n; ++i) {

@@ -123,8 +123,7 @@ TEST(Canvas, TextDrawsTheGlyphBitmapAtTheRequestedScale) {
   EXPECT_EQ(canvas.pixel(1 + 5, 2), colors::kBlack);
   EXPECT_EQ(canvas.pixel(1, 1), colors::kWhite);
   EXPECT_EQ(Canvas::textWidth("12", 2), (2 * kGlyphAdvance - 1) * 2);
-  for (char c : std::string("0123456789.-:% abcxyzABCXYZ[]()/"))
-    EXPECT_TRUE(hasGlyph(c)) << c;
+  for (char c : std::string("0123456789.-:% abcxyzABCXYZ[]()/")) EXPECT_TRUE(hasGlyph(c)) << c;
 }
 
 TEST(Plot2D, NiceTicksUseOneTwoFiveStepsCoveringTheRange) {

@@ -88,7 +88,8 @@ TEST(ImuInitializer, RefusesAnAccelerationMagnitudeThatIsNeitherGNorMetresPerSec
 
 TEST(ImuInitializer, WaitsWhileTheRigMovesAndSaysWhy) {
   ImuInitializer init;
-  for (const auto& s : staticSamples(Eigen::Quaterniond::Identity(), 1.0, 1.5, Eigen::Vector3d::Zero(), 0.5)) init.add(s);
+  for (const auto& s : staticSamples(Eigen::Quaterniond::Identity(), 1.0, 1.5, Eigen::Vector3d::Zero(), 0.5))
+    init.add(s);
   EXPECT_FALSE(init.ready());
   const ImuInitResult r = init.result();
   EXPECT_FALSE(r.ok);
@@ -97,7 +98,8 @@ TEST(ImuInitializer, WaitsWhileTheRigMovesAndSaysWhy) {
 
 TEST(ImuInitializer, ForcesAnInitialisationAfterTooLongWithoutRest) {
   ImuInitializer init;
-  for (const auto& s : staticSamples(Eigen::Quaterniond::Identity(), 1.0, 3.0, Eigen::Vector3d::Zero(), 0.5)) init.add(s);
+  for (const auto& s : staticSamples(Eigen::Quaterniond::Identity(), 1.0, 3.0, Eigen::Vector3d::Zero(), 0.5))
+    init.add(s);
   ASSERT_TRUE(init.ready());
   const ImuInitResult r = init.result();
   EXPECT_TRUE(r.ok);

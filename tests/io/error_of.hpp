@@ -20,9 +20,8 @@ inline std::string errorOf(const std::function<void()>& f) {
 }  // namespace mmlio::io
 
 /// The statement throws an mmlio::Error whose message contains `text`.
-#define EXPECT_ERROR_CONTAINS(statement, text)                              \
-  do {                                                                      \
-    const std::string msg_ = errorOf([&] { statement; });                   \
-    EXPECT_NE(msg_.find(text), std::string::npos) << "message: " << msg_;   \
+#define EXPECT_ERROR_CONTAINS(statement, text)                            \
+  do {                                                                    \
+    const std::string msg_ = errorOf([&] { statement; });                 \
+    EXPECT_NE(msg_.find(text), std::string::npos) << "message: " << msg_; \
   } while (0)
-

@@ -193,7 +193,7 @@ inline void writeMcap(const std::vector<Ros2Record>& records, const std::string&
   std::size_t chunks = 0;
   auto out = [&]() -> McapBytes& { return o.chunked ? chunk : file; };
   std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, std::uint64_t>>> chunk_index;  // channel: time, offset
-  std::vector<McapBytes> chunk_indexes;  // for the summary
+  std::vector<McapBytes> chunk_indexes;                                                       // for the summary
   auto flush = [&] {
     if (!o.chunked || chunk.b.empty()) return;
     McapBytes c;

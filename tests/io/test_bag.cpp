@@ -433,8 +433,8 @@ TEST(BagInfo, DescribesTopicsCountsRatesFieldsPointsAndImuUnit) {
   const TopicInfo& velo = info.topics[3];
   EXPECT_EQ(velo.topic, "/velodyne_points");
   EXPECT_DOUBLE_EQ(velo.mean_points, 50.0);
-  const std::vector<std::string> fields = {"x(float32)", "y(float32)", "z(float32)", "intensity(float32)",
-                                           "ring(uint16)", "time(float32)"};
+  const std::vector<std::string> fields = {"x(float32)",         "y(float32)",   "z(float32)",
+                                           "intensity(float32)", "ring(uint16)", "time(float32)"};
   EXPECT_EQ(velo.fields, fields);
   const std::string text = formatBagInfo(info);
   EXPECT_NE(text.find("duration  0.990 s"), std::string::npos) << text;

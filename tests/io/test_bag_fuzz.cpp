@@ -71,8 +71,7 @@ std::vector<char> readAll(const std::string& path) {
 
 /// kCases damaged copies of `good`, written as `dir`/caseN`extension`: each refused with an
 /// mmlio::Error or streamed (finite points, bounded events).
-void fuzz(const std::vector<char>& good, const fs::path& dir, const std::string& extension, int kCases,
-          unsigned seed) {
+void fuzz(const std::vector<char>& good, const fs::path& dir, const std::string& extension, int kCases, unsigned seed) {
   ASSERT_GT(good.size(), 1000u);
   std::mt19937 rng(seed);
   std::size_t refused = 0, streamed = 0, events_total = 0;
@@ -81,7 +80,8 @@ void fuzz(const std::vector<char>& good, const fs::path& dir, const std::string&
     const auto pick = [&](std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng); };
     switch (c % 4) {
       case 0:  // a few bytes flipped anywhere
-        for (int k = 0; k < 1 + static_cast<int>(pick(8)); ++k) bytes[pick(bytes.size())] ^= static_cast<char>(1 + pick(255));
+        for (int k = 0; k < 1 + static_cast<int>(pick(8)); ++k)
+          bytes[pick(bytes.size())] ^= static_cast<char>(1 + pick(255));
         break;
       case 1: {  // a stretch overwritten with garbage
         const std::size_t at = pick(bytes.size()), len = 16 + pick(2048);

@@ -191,7 +191,8 @@ TEST(Loading, ListReplacesTheDefaultLidars) {
 TEST(Loading, RelativeCalibrationPathResolvesAgainstTheConfigDirectory) {
   TempDir dir;
   const std::string path = dir.write("rig.yaml", "calibration: calib/out.yaml\n");
-  EXPECT_ERROR_CONTAINS(loadRigConfig(path), "calibration: file '" + (dir.path / "calib/out.yaml").string() + "' not found");
+  EXPECT_ERROR_CONTAINS(loadRigConfig(path),
+                        "calibration: file '" + (dir.path / "calib/out.yaml").string() + "' not found");
   fs::create_directories(dir.path / "calib");
   dir.write("calib/out.yaml", "");
   EXPECT_EQ(loadRigConfig(path).calibration, (dir.path / "calib/out.yaml").string());
@@ -223,7 +224,8 @@ TEST(Strict, WrongTypeErrorNamesTheKeyPath) {
   EXPECT_ERROR_CONTAINS(parseRigConfig("odometry:\n  window_size: four\n", "rig.yaml"),
                         "rig.yaml:2: odometry.window_size: expected an integer, got 'four'");
   EXPECT_ERROR_CONTAINS(parseRigConfig("odometry:\n  window_size: 2.5\n", "rig.yaml"), "expected an integer");
-  EXPECT_ERROR_CONTAINS(parseRigConfig("loop:\n  enabled: maybe\n", "rig.yaml"), "loop.enabled: expected true or false");
+  EXPECT_ERROR_CONTAINS(parseRigConfig("loop:\n  enabled: maybe\n", "rig.yaml"),
+                        "loop.enabled: expected true or false");
   EXPECT_ERROR_CONTAINS(parseRigConfig("imu: /livox/imu\n", "rig.yaml"), "imu: expected a map of keys");
   EXPECT_ERROR_CONTAINS(parseRigConfig("lidars:\n  - name: a\n    topic: [1, 2]\n", "rig.yaml"),
                         "rig.yaml:3: lidars[0].topic: expected a string, got a sequence");
@@ -259,21 +261,25 @@ TEST(Validation, BadValuesAreErrorsNamingTheKey) {
                         "reference_lidar: 'ouster' is not one of the lidars (velodyne, livox)");
   EXPECT_ERROR_CONTAINS(
       parseRigConfig("lidars:\n  - {name: a, type: velodyne, topic: /a}\n  - {name: b, type: lidar, topic: /b}\n"
-                     "reference_lidar: a\n", "r.yaml"),
+                     "reference_lidar: a\n",
+                     "r.yaml"),
       "lidars[1].type: must be velodyne, ouster, hesai, generic_spinning or livox, got 'lidar'");
   EXPECT_ERROR_CONTAINS(
       parseRigConfig("lidars:\n  - {name: a, type: velodyne, topic: /a}\n  - {name: a, type: livox, topic: /b}\n"
-                     "reference_lidar: a\n", "r.yaml"),
+                     "reference_lidar: a\n",
+                     "r.yaml"),
       "lidars[1].name: 'a' is used twice");
   EXPECT_ERROR_CONTAINS(parseRigConfig("lidars:\n  - {name: a, type: velodyne}\nreference_lidar: a\n", "r.yaml"),
                         "lidars[0].topic: is required");
   EXPECT_ERROR_CONTAINS(
       parseRigConfig("lidars:\n  - {name: a, type: velodyne, topic: /a, min_range_m: 5, max_range_m: 2}\n"
-                     "reference_lidar: a\n", "r.yaml"),
+                     "reference_lidar: a\n",
+                     "r.yaml"),
       "lidars[0].max_range_m: must be > min_range_m");
   // hi on a rig without a livox.
   EXPECT_ERROR_CONTAINS(parseRigConfig("mode: hi\nlidars:\n  - {name: a, type: velodyne, topic: /a}\n"
-                                       "reference_lidar: a\n", "r.yaml"),
+                                       "reference_lidar: a\n",
+                                       "r.yaml"),
                         "mode: 'hi' uses no enabled LiDAR");
 }
 
@@ -290,7 +296,8 @@ TEST(Validation, ExtrinsicMustBeSixteenNumbersOfARigidTransform) {
                         "reflection");
   // A 90 degree yaw written with 9 decimals is accepted.
   const RigConfig cfg = parseRigConfig(
-      head + "[0.000000000, -1.000000000, 0, 1, 1.000000000, 0.000000000, 0, 2, 0, 0, 1, 3, 0, 0, 0, 1]" + tail, "r.yaml");
+      head + "[0.000000000, -1.000000000, 0, 1, 1.000000000, 0.000000000, 0, 2, 0, 0, 1, 3, 0, 0, 0, 1]" + tail,
+      "r.yaml");
   EXPECT_TRUE(cfg.lidars[0].T_imu_sensor.linear().isApprox(
       Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix(), 1e-12));
   EXPECT_EQ(cfg.lidars[0].T_imu_sensor.translation(), Eigen::Vector3d(1, 2, 3));
@@ -325,8 +332,8 @@ TEST(Validation, ExtrinsicAlsoAsXyzWithRollPitchYawOrAQuaternion) {
   EXPECT_ERROR_CONTAINS(parseRigConfig(head + "{xyz: [0, 0, 0], ypr_deg: [0, 0, 0]}" + tail, "r.yaml"),
                         "unknown key 'ypr_deg'");
   // A matrix typed with 4 digits (a 30 deg yaw) is taken as the nearest rotation.
-  const RigConfig typed = parseRigConfig(head + "[0.8660, -0.5000, 0, 0, 0.5000, 0.8660, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]" +
-                                             tail, "r.yaml");
+  const RigConfig typed =
+      parseRigConfig(head + "[0.8660, -0.5000, 0, 0, 0.5000, 0.8660, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]" + tail, "r.yaml");
   EXPECT_TRUE(typed.lidars[0].T_imu_sensor.linear().isApprox(
       Eigen::AngleAxisd(M_PI / 6, Eigen::Vector3d::UnitZ()).toRotationMatrix(), 1e-4));
 }
@@ -341,10 +348,11 @@ TEST(Validation, APlaceholderMountAndAMissingExtrinsicAreNamed) {
 
   std::string warned;
   log::configure(log::Level::kInfo, [&](log::Level, const std::string& m) { warned += m + "\n"; });
-  parseRigConfig("lidars:\n  - {name: a, type: velodyne, topic: /a}\n"
-                 "  - {name: b, type: livox, topic: /b, T_imu_sensor: {xyz: [0, 0, 0], rpy_deg: [0, 0, 0]}}\n"
-                 "reference_lidar: a\n",
-                 "r.yaml");
+  parseRigConfig(
+      "lidars:\n  - {name: a, type: velodyne, topic: /a}\n"
+      "  - {name: b, type: livox, topic: /b, T_imu_sensor: {xyz: [0, 0, 0], rpy_deg: [0, 0, 0]}}\n"
+      "reference_lidar: a\n",
+      "r.yaml");
   log::configure(log::Level::kInfo);
   EXPECT_NE(warned.find("r.yaml:2: lidars[0].T_imu_sensor not given: LiDAR 'a'"), std::string::npos) << warned;
   EXPECT_EQ(warned.find("LiDAR 'b'"), std::string::npos) << warned;
@@ -377,7 +385,8 @@ TEST(Modes, HviUsesBothViTheVelodyneHiTheLivox) {
 TEST(Calibration, RoundTripKeepsTransformsAndOffsetsExactly) {
   TempDir dir;
   Calibration in;
-  in["velodyne"].T_imu_sensor.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  in["velodyne"].T_imu_sensor.linear() =
+      Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
   in["velodyne"].T_imu_sensor.translation() = Eigen::Vector3d(0.1, -1.0 / 3.0, 0.2);
   in["velodyne"].time_offset_s = -0.0125;
   in["livox"].T_imu_sensor.translation() = Eigen::Vector3d(0.05512, 0.02226, -0.0297);
@@ -460,8 +469,9 @@ TEST(Calibration, MalformedFilesAreErrorsNamingThePath) {
   const std::string none = dir.write("n.yaml", "fitness: 0.1\n");
   EXPECT_ERROR_CONTAINS(readCalibration(none), "no sensor found");
   const std::string bad_offset =
-      dir.write("o.yaml", "velodyne:\n  T_imu_sensor: [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]\n"
-                          "  time_offset_s: soon\n");
+      dir.write("o.yaml",
+                "velodyne:\n  T_imu_sensor: [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]\n"
+                "  time_offset_s: soon\n");
   EXPECT_ERROR_CONTAINS(readCalibration(bad_offset), "sensor 'velodyne': time_offset_s: expected a number");
 }
 

@@ -21,10 +21,16 @@ struct FieldSpec {
 
 std::size_t sizeOf(std::uint8_t t) {
   switch (t) {
-    case PF::INT8: case PF::UINT8: return 1;
-    case PF::INT16: case PF::UINT16: return 2;
-    case PF::FLOAT64: return 8;
-    default: return 4;
+    case PF::INT8:
+    case PF::UINT8:
+      return 1;
+    case PF::INT16:
+    case PF::UINT16:
+      return 2;
+    case PF::FLOAT64:
+      return 8;
+    default:
+      return 4;
   }
 }
 
@@ -69,7 +75,7 @@ void putXyz(sensor_msgs::PointCloud2& c, std::size_t i, float x, float y, float 
 
 const Stamp kStamp = 1'600'000'000'000'000'000LL;
 
-const std::vector<FieldSpec> kVelodyne = {{"x", PF::FLOAT32},         {"y", PF::FLOAT32},    {"z", PF::FLOAT32},
+const std::vector<FieldSpec> kVelodyne = {{"x", PF::FLOAT32},         {"y", PF::FLOAT32},   {"z", PF::FLOAT32},
                                           {"intensity", PF::FLOAT32}, {"ring", PF::UINT16}, {"time", PF::FLOAT32}};
 
 TEST(CloudDecoders, VelodyneNegativeRelativeTimesAreSortedAndRebasedOnTheEarliestPoint) {
@@ -101,8 +107,12 @@ TEST(CloudDecoders, VelodyneNegativeRelativeTimesAreSortedAndRebasedOnTheEarlies
 }
 
 TEST(CloudDecoders, OusterTIsNanosecondsAfterTheHeaderStamp) {
-  auto c = makeCloud({{"x", PF::FLOAT32}, {"y", PF::FLOAT32}, {"z", PF::FLOAT32}, {"t", PF::UINT32},
-                      {"reflectivity", PF::UINT16}, {"ring", PF::UINT8}},
+  auto c = makeCloud({{"x", PF::FLOAT32},
+                      {"y", PF::FLOAT32},
+                      {"z", PF::FLOAT32},
+                      {"t", PF::UINT32},
+                      {"reflectivity", PF::UINT16},
+                      {"ring", PF::UINT8}},
                      kStamp, 3);
   const std::uint32_t t[3] = {3000, 1000, 2000};
   for (std::size_t i = 0; i < 3; ++i) {
@@ -121,8 +131,12 @@ TEST(CloudDecoders, OusterTIsNanosecondsAfterTheHeaderStamp) {
 }
 
 TEST(CloudDecoders, HesaiTimestampIsAbsoluteSeconds) {
-  auto c = makeCloud({{"x", PF::FLOAT32}, {"y", PF::FLOAT32}, {"z", PF::FLOAT32}, {"intensity", PF::FLOAT32},
-                      {"timestamp", PF::FLOAT64}, {"ring", PF::UINT16}},
+  auto c = makeCloud({{"x", PF::FLOAT32},
+                      {"y", PF::FLOAT32},
+                      {"z", PF::FLOAT32},
+                      {"intensity", PF::FLOAT32},
+                      {"timestamp", PF::FLOAT64},
+                      {"ring", PF::UINT16}},
                      kStamp, 2);
   putXyz(c, 0, 3.f, 0.f, 0.f);
   putXyz(c, 1, 4.f, 0.f, 0.f);
@@ -162,9 +176,9 @@ TEST(CloudDecoders, NanZeroAndOutOfRangePointsAreDroppedAndCounted) {
   putXyz(c, 0, nan, 1.f, 1.f);
   putXyz(c, 1, 1.f, std::numeric_limits<float>::infinity(), 1.f);
   putXyz(c, 2, 0.f, 0.f, 0.f);
-  putXyz(c, 3, 0.2f, 0.f, 0.f);    // closer than 0.5 m
-  putXyz(c, 4, 150.f, 0.f, 0.f);   // farther than 100 m
-  putXyz(c, 5, 10.f, 0.f, 0.f);    // kept
+  putXyz(c, 3, 0.2f, 0.f, 0.f);   // closer than 0.5 m
+  putXyz(c, 4, 150.f, 0.f, 0.f);  // farther than 100 m
+  putXyz(c, 5, 10.f, 0.f, 0.f);   // kept
   put(c, 5, "time", 0.03f);
   DecodeStats st;
   const LidarScan s = decodePointCloud2(c, CloudDecodeOptions{}, &st);

@@ -31,11 +31,11 @@ TEST(StarterRigConfig, AVelodyneALivoxAndItsImuGiveAnHviRigThatLoads) {
   BagInfo info;
   info.path = "rig.bag";
   info.imu_unit_guess = "g";
-  info.topics = {topic("/imu/data", "sensor_msgs/Imu", 100),
-                 topic("/livox/imu", "sensor_msgs/Imu", 200),
-                 topic("/livox/lidar", "livox_ros_driver/CustomMsg", 10),
-                 topic("/velodyne_points", "sensor_msgs/PointCloud2", 10,
-                       {"x(float32)", "y(float32)", "z(float32)", "intensity(float32)", "ring(uint16)", "time(float32)"})};
+  info.topics = {
+      topic("/imu/data", "sensor_msgs/Imu", 100), topic("/livox/imu", "sensor_msgs/Imu", 200),
+      topic("/livox/lidar", "livox_ros_driver/CustomMsg", 10),
+      topic("/velodyne_points", "sensor_msgs/PointCloud2", 10,
+            {"x(float32)", "y(float32)", "z(float32)", "intensity(float32)", "ring(uint16)", "time(float32)"})};
   const std::string text = starterRigConfig(info);
   const RigConfig cfg = parseRigConfig(text, "starter.yaml");
   EXPECT_EQ(cfg.mode, "hvi");
@@ -67,8 +67,7 @@ TEST(StarterRigConfig, TheCloudsFieldsNameTheDriverAndTheKindsNameTheMode) {
   EXPECT_EQ(cfg.lidars[1].type, "ouster");
   EXPECT_EQ(cfg.lidars[1].num_rings, 64);
 
-  info.topics = {topic("/imu", "sensor_msgs/msg/Imu", 200),
-                 topic("/a", "livox_ros_driver2/msg/CustomMsg", 10),
+  info.topics = {topic("/imu", "sensor_msgs/msg/Imu", 200), topic("/a", "livox_ros_driver2/msg/CustomMsg", 10),
                  topic("/b", "livox_ros_driver2/msg/CustomMsg", 10)};
   const RigConfig two = parseRigConfig(starterRigConfig(info), "starter.yaml");
   EXPECT_EQ(two.mode, "hi");
@@ -78,7 +77,7 @@ TEST(StarterRigConfig, TheCloudsFieldsNameTheDriverAndTheKindsNameTheMode) {
 }
 
 geometry_msgs::TransformStamped transform(const std::string& parent, const std::string& child,
-                                         const Eigen::Isometry3d& T) {
+                                          const Eigen::Isometry3d& T) {
   geometry_msgs::TransformStamped t;
   t.header.frame_id = parent;
   t.child_frame_id = child;
@@ -106,7 +105,8 @@ TEST(StarterRigConfig, ExtrinsicsComeFromTheBagsTfStaticThroughTheFrameTree) {
     rosbag::Bag bag(path, rosbag::bagmode::Write);
     const ros::Time t0(1700000000, 0);
     tf2_msgs::TFMessage tf;
-    tf.transforms = {transform("base_link", "imu_link", T_base_imu), transform("/base_link", "velodyne", T_base_velodyne)};
+    tf.transforms = {transform("base_link", "imu_link", T_base_imu),
+                     transform("/base_link", "velodyne", T_base_velodyne)};
     bag.write("/tf_static", t0, tf);
     for (int k = 0; k < 3; ++k) {
       const ros::Time t = t0 + ros::Duration(0.1 * k);
@@ -118,8 +118,8 @@ TEST(StarterRigConfig, ExtrinsicsComeFromTheBagsTfStaticThroughTheFrameTree) {
       sensor_msgs::PointCloud2 cloud;
       cloud.header.stamp = t;
       cloud.header.frame_id = "velodyne";
-      for (const auto& [name, offset, type] : {std::tuple<const char*, int, int>{"x", 0, 7}, {"y", 4, 7}, {"z", 8, 7},
-                                               {"ring", 12, 4}, {"time", 16, 7}}) {
+      for (const auto& [name, offset, type] :
+           {std::tuple<const char*, int, int>{"x", 0, 7}, {"y", 4, 7}, {"z", 8, 7}, {"ring", 12, 4}, {"time", 16, 7}}) {
         sensor_msgs::PointField f;
         f.name = name;
         f.offset = offset;

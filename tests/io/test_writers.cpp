@@ -26,9 +26,8 @@ namespace {
 struct TempDir {
   fs::path path;
   TempDir() {
-    path = fs::temp_directory_path() /
-           ("mmlio_test_writers_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    path = fs::temp_directory_path() / ("mmlio_test_writers_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(path);
     fs::create_directories(path);
   }
@@ -138,8 +137,7 @@ TEST(Tum, MalformedRowErrorNamesFileAndLine) {
 }
 
 TEST(Tum, MissingFileErrorNamesThePath) {
-  EXPECT_NE(errorOf([] { readTum("/nonexistent/dir/traj.txt"); }).find("/nonexistent/dir/traj.txt"),
-            std::string::npos);
+  EXPECT_NE(errorOf([] { readTum("/nonexistent/dir/traj.txt"); }).find("/nonexistent/dir/traj.txt"), std::string::npos);
 }
 
 TEST(Kitti, RoundTripKeepsAllTwelveNumbersAndStampsExactly) {
@@ -177,10 +175,11 @@ TEST(Kitti, TimesWithWrongLineCountIsAnError) {
 TEST(AtomicWrite, FailedWriteLeavesNeitherTheTargetNorATempFile) {
   TempDir dir;
   const std::string path = dir.file("out.txt");
-  EXPECT_THROW(writeFileAtomically(path, [](std::ostream& out) {
-                 out << "half";
-                 throw Error("boom");
-               }),
+  EXPECT_THROW(writeFileAtomically(path,
+                                   [](std::ostream& out) {
+                                     out << "half";
+                                     throw Error("boom");
+                                   }),
                Error);
   EXPECT_FALSE(fs::exists(path));
   EXPECT_TRUE(fs::is_empty(dir.path));
@@ -265,7 +264,8 @@ TEST(Pcd, AsciiWithExtraFieldsAndCountReads) {
             "1 2 3 255 0 0 1 7\n-4.5 nan 6 0 1 0 0 3\n");
   const PcdCloud cloud = readPcdFields(dir.file("a.pcd"));
   ASSERT_EQ(cloud.size(), 2u);
-  EXPECT_EQ(cloud.fields, (std::vector<std::string>{"x", "y", "z", "rgb", "normal[0]", "normal[1]", "normal[2]", "ring"}));
+  EXPECT_EQ(cloud.fields,
+            (std::vector<std::string>{"x", "y", "z", "rgb", "normal[0]", "normal[1]", "normal[2]", "ring"}));
   EXPECT_EQ(cloud.column("normal[2]")[0], 1.0);
   EXPECT_EQ(cloud.column("ring")[1], 3.0);
   const auto points = readPcd(dir.file("a.pcd"));
@@ -287,8 +287,9 @@ TEST(Pcd, BinaryCompressedDecodesFieldMajorLzfData) {
   lzf.push_back(1);  // literal, 2 bytes
   lzf.push_back(5);
   lzf.push_back(0);
-  std::string file = "VERSION 0.7\nFIELDS x ring\nSIZE 4 2\nTYPE F U\nCOUNT 1 1\nWIDTH 2\nHEIGHT 1\n"
-                     "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA binary_compressed\n";
+  std::string file =
+      "VERSION 0.7\nFIELDS x ring\nSIZE 4 2\nTYPE F U\nCOUNT 1 1\nWIDTH 2\nHEIGHT 1\n"
+      "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA binary_compressed\n";
   const std::uint32_t sizes[2] = {static_cast<std::uint32_t>(lzf.size()), 12};
   file.append(reinterpret_cast<const char*>(sizes), 8);
   file += lzf;

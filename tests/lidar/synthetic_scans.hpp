@@ -21,7 +21,8 @@ struct BoxRoom {
   }
   // Azimuths (rad) of the four vertical corners.
   std::vector<double> cornerAzimuths() const {
-    return {std::atan2(hi.y(), hi.x()), std::atan2(hi.y(), lo.x()), std::atan2(lo.y(), lo.x()), std::atan2(lo.y(), hi.x())};
+    return {std::atan2(hi.y(), hi.x()), std::atan2(hi.y(), lo.x()), std::atan2(lo.y(), lo.x()),
+            std::atan2(lo.y(), hi.x())};
   }
 };
 

@@ -19,9 +19,8 @@ Eigen::Isometry3d makeExtrinsic() {
 
 // Points of the static wall x = 5 (world) seen by a sensor while the body follows T_world_body(t);
 // returns the sweep as measured (sensor frame at each point's time) and the truth at the sweep end.
-template <typename PoseAt>
-void scanWall(const PoseAt& T_world_body, const Eigen::Isometry3d& T_imu_sensor, double sweep_s, LidarScan* scan,
-              std::vector<Eigen::Vector3d>* truth_at_end) {
+template <typename PoseAt> void scanWall(const PoseAt& T_world_body, const Eigen::Isometry3d& T_imu_sensor,
+                                         double sweep_s, LidarScan* scan, std::vector<Eigen::Vector3d>* truth_at_end) {
   const Eigen::Isometry3d T_world_sensor_end = T_world_body(sweep_s) * T_imu_sensor;
   const int n = 2000;
   for (int i = 0; i < n; ++i) {

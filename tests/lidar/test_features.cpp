@@ -130,7 +130,9 @@ TEST(Features, RingsOfASweepLongerThanATurnAreReadInAzimuthOrder) {
   std::reverse(clockwise.points.begin(), clockwise.points.end());
   const Eigen::Matrix3f nudge =
       Eigen::AngleAxisf(0.07f * static_cast<float>(M_PI) / 180.f, Eigen::Vector3f::UnitZ()).toRotationMatrix();
-  const auto azimuth = [](const Point& p) { return std::atan2(static_cast<double>(p.xyz.y()), static_cast<double>(p.xyz.x())); };
+  const auto azimuth = [](const Point& p) {
+    return std::atan2(static_cast<double>(p.xyz.y()), static_cast<double>(p.xyz.x()));
+  };
   for (const LidarScan* turn : std::array<const LidarScan*, 2>{&scan, &clockwise})
     for (const double start_fraction : {0.0, 0.5})
       for (const bool same_azimuth : {false, true}) {
@@ -167,7 +169,7 @@ TEST(Features, LivoxLikeLineScanGivesCornerEdgesAndWallPlanes) {
   const Split e = splitByEdge(room, f.edges, 0.3);
   std::cout << "livox synthetic: edges at room edges " << e.at_edge << " elsewhere " << e.elsewhere << " planes "
             << f.planes.size() << "\n";
-  EXPECT_GE(e.at_edge, 6 * 4);  // 6 lines x 4 passes cross the vertical corner
+  EXPECT_GE(e.at_edge, 6 * 4);            // 6 lines x 4 passes cross the vertical corner
   EXPECT_LE(e.elsewhere, e.at_edge / 5);  // 2 cm range noise, as a Horizon
   EXPECT_GT(f.planes.size(), 2000u);
   const Split p = splitByEdge(room, f.planes, 0.05);

@@ -135,7 +135,8 @@ TEST(SweepAligner, WhenTheReferenceComesBackItsSweepsDefineTheWindowsAgain) {
   float tag = 0;
   std::vector<LidarScan> frames;
   for (int k = 0; k < 3; ++k) frames.push_back(makeFrame("velodyne", 1.0 + 0.1 * k, 1000, 0.1, &tag));
-  for (int k = 10; k < 15; ++k) frames.push_back(makeFrame("velodyne", 1.0 + 0.1 * k, 1000, 0.1, &tag));  // gap 1.3-2.0 s
+  for (int k = 10; k < 15; ++k)
+    frames.push_back(makeFrame("velodyne", 1.0 + 0.1 * k, 1000, 0.1, &tag));  // gap 1.3-2.0 s
   for (int k = 0; k < 15; ++k) frames.push_back(makeFrame("livox", 1.02 + 0.1 * k, 500, 0.1, &tag));
   SweepAligner aligner({"velodyne", 0.3, 0.5});
   const Collected c = run(aligner, frames);

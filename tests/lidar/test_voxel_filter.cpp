@@ -18,7 +18,8 @@ TEST(VoxelFilter, OnePointPerOccupiedVoxelAtTheCentroidWithMeanIntensity) {
   std::vector<Point> pts;
   for (int i = 0; i < 10; ++i)
     for (int j = 0; j < 10; ++j)
-      for (int k = 0; k < 10; ++k) pts.push_back(P(0.05f + 0.1f * i, 0.05f + 0.1f * j, 0.05f + 0.1f * k, i < 5 ? 10.f : 30.f));
+      for (int k = 0; k < 10; ++k)
+        pts.push_back(P(0.05f + 0.1f * i, 0.05f + 0.1f * j, 0.05f + 0.1f * k, i < 5 ? 10.f : 30.f));
   const auto out = mmlio::lidar::voxelDownsample(pts, 0.5);
   ASSERT_EQ(out.size(), 8u);
   for (const auto& p : out) {

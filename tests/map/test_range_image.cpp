@@ -35,10 +35,10 @@ TEST(RangeImage, InFrontOfAWallIsFreeOnItIsHitBehindItIsOccludedElsewhereUnknown
   EXPECT_EQ(image.classify(dir(5.0, 0, 0)), Visibility::kFree);
   EXPECT_EQ(image.classify(dir(10.0, 0.1, 0.1)), Visibility::kHit);
   EXPECT_EQ(image.classify(dir(13.0, 0, 0)), Visibility::kOccluded);
-  EXPECT_EQ(image.classify(dir(5.0, 90, 0)), Visibility::kUnknown);    // nobody looked there
-  EXPECT_EQ(image.classify(dir(0.3, 0, 0)), Visibility::kUnknown);     // inside the blind zone
-  EXPECT_EQ(image.classify(dir(9.9, 0, 0)), Visibility::kHit);         // within the range noise: on the wall
-  EXPECT_EQ(image.classify(dir(9.8, 0, 0)), Visibility::kUnknown);     // too close to be free, too far to be on it
+  EXPECT_EQ(image.classify(dir(5.0, 90, 0)), Visibility::kUnknown);  // nobody looked there
+  EXPECT_EQ(image.classify(dir(0.3, 0, 0)), Visibility::kUnknown);   // inside the blind zone
+  EXPECT_EQ(image.classify(dir(9.9, 0, 0)), Visibility::kHit);       // within the range noise: on the wall
+  EXPECT_EQ(image.classify(dir(9.8, 0, 0)), Visibility::kUnknown);   // too close to be free, too far to be on it
 }
 
 TEST(RangeImage, PointsAtTheEdgeOfTheFieldOfViewAreNeverFree) {
@@ -53,9 +53,9 @@ TEST(RangeImage, BesideADepthEdgeOnlyWhatIsInFrontOfBothSidesIsFree) {
   for (double a = -20; a <= 20; a += 0.2)
     for (double e = -5; e <= 5; e += 0.2) pts.push_back(at(a < 0 ? 10.0 : 3.0, a, e));
   const RangeImage image(pts, RangeImageConfig{});
-  EXPECT_EQ(image.classify(dir(6.0, -10, 0)), Visibility::kFree);     // far from the edge
-  EXPECT_NE(image.classify(dir(6.0, -0.3, 0)), Visibility::kFree);    // behind the near side's rays
-  EXPECT_EQ(image.classify(dir(2.0, -0.3, 0)), Visibility::kFree);    // in front of both
+  EXPECT_EQ(image.classify(dir(6.0, -10, 0)), Visibility::kFree);   // far from the edge
+  EXPECT_NE(image.classify(dir(6.0, -0.3, 0)), Visibility::kFree);  // behind the near side's rays
+  EXPECT_EQ(image.classify(dir(2.0, -0.3, 0)), Visibility::kFree);  // in front of both
 }
 
 TEST(RangeImage, AFloorBetweenTheRingsOfASpinningLidarIsNotFree) {

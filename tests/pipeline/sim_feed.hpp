@@ -68,8 +68,9 @@ inline void replay(const sim::Simulator& sim, pipeline::OnlinePipeline& pipeline
 
 /// The simulated sequence as a bag at `path`, as `mmlio simulate` writes it (Livox IMU in g,
 /// Livox CustomMsg, Velodyne PointCloud2), without the IMU samples `keep_imu` refuses.
-inline void writeSimBag(const sim::Simulator& sim, const std::string& path,
-                        const std::function<bool(const ImuSample&)>& keep_imu = [](const ImuSample&) { return true; }) {
+inline void writeSimBag(
+    const sim::Simulator& sim, const std::string& path,
+    const std::function<bool(const ImuSample&)>& keep_imu = [](const ImuSample&) { return true; }) {
   io::BagWriter bag(path);
   const std::vector<ImuSample>& imu = sim.imu();
   const Stamp kNever = std::numeric_limits<Stamp>::max();

@@ -67,10 +67,10 @@ TEST(ImuGate, DropsAndCountsNonFiniteImpossibleAndDisorderedSamples) {
   huge.acc_m_s2.y() = 1.8e109;
   EXPECT_FALSE(gate.accept(huge));
   EXPECT_TRUE(gate.accept(at(0.015)));
-  EXPECT_FALSE(gate.accept(at(0.015)));  // duplicate
-  EXPECT_FALSE(gate.accept(at(0.012)));  // out of order
+  EXPECT_FALSE(gate.accept(at(0.015)));               // duplicate
+  EXPECT_FALSE(gate.accept(at(0.012)));               // out of order
   EXPECT_FALSE(gate.accept(at(86.0 * 365 * 86400)));  // one stamp decades ahead ...
-  EXPECT_TRUE(gate.accept(at(0.020)));   // ... does not block the stream that follows
+  EXPECT_TRUE(gate.accept(at(0.020)));                // ... does not block the stream that follows
   EXPECT_EQ(gate.counts().non_finite, 1u);
   EXPECT_EQ(gate.counts().out_of_range, 1u);
   EXPECT_EQ(gate.counts().out_of_order, 2u);
@@ -85,7 +85,7 @@ TEST(ImuGate, AStreamThatStaysAfterAGapIsAcceptedAgainAfterAFewSamples) {
   for (int k = 0; k < 10; ++k) EXPECT_TRUE(gate.accept(at(0.005 * k)));
   int accepted = 0;
   for (int k = 0; k < 100; ++k) accepted += gate.accept(at(3.0 + 0.005 * k));  // 3 s later, for good
-  EXPECT_EQ(gate.counts().jumped, 19u);  // until 20 samples agree
+  EXPECT_EQ(gate.counts().jumped, 19u);                                        // until 20 samples agree
   EXPECT_EQ(accepted, 81);
 }
 
@@ -104,12 +104,12 @@ TEST(InputGates, OneCorruptImuSampleOrScanStampLeavesTheTrajectoryAsGoodAsTheCle
   EXPECT_LT(faulty_ate, 1.2 * clean_ate + 0.002) << "clean " << clean_ate;
 
   // One Velodyne sweep stamped in the year 2106: that sweep is lost, tracking goes on.
-  const Trajectory late = runOffice(
-      sim,
-      [](int index, LidarScan& scan) {
-        if ((index == 120 || index == 121) && scan.sensor == "velodyne") scan.start_ns += fromSec(4e9);
-      },
-      {});
+  const Trajectory late = runOffice(sim,
+                                    [](int index, LidarScan& scan) {
+                                      if ((index == 120 || index == 121) && scan.sensor == "velodyne")
+                                        scan.start_ns += fromSec(4e9);
+                                    },
+                                    {});
   EXPECT_GE(late.size() + 2, clean.size());
   EXPECT_LT(eval::evaluate(sim.groundTruth(), late).ate_rmse_m, 1.2 * clean_ate + 0.002);
 }
@@ -169,8 +169,14 @@ TEST(InputGates, AJumpOfTheWholeStreamsTimeBaseIsARestartNotAGapToExtrapolate) {
   std::size_t jumps = 0;
   const Stamp jump_at = sim.groundTruth().front().stamp_ns + fromSec(6.0);
   const Trajectory jumped = runOffice(
-      sim, [&](int, LidarScan& scan) { if (scan.start_ns >= jump_at) scan.start_ns += fromSec(5.0); },
-      [&](std::size_t, ImuSample& s) { if (s.stamp_ns >= jump_at) s.stamp_ns += fromSec(5.0); }, nullptr, &jumps);
+      sim,
+      [&](int, LidarScan& scan) {
+        if (scan.start_ns >= jump_at) scan.start_ns += fromSec(5.0);
+      },
+      [&](std::size_t, ImuSample& s) {
+        if (s.stamp_ns >= jump_at) s.stamp_ns += fromSec(5.0);
+      },
+      nullptr, &jumps);
   EXPECT_EQ(jumps, 1u);
   // Scored against the truth re-timed the same way: the poses keep the input's stamps.
   Trajectory truth = sim.groundTruth();
@@ -185,8 +191,12 @@ TEST(InputGates, AJumpOfTheWholeStreamsTimeBaseIsARestartNotAGapToExtrapolate) {
 
   // The IMU alone jumping is no time-base jump (its gap is handled as a gap).
   std::size_t imu_only = 0;
-  runOffice(sim, {}, [&](std::size_t, ImuSample& s) { if (s.stamp_ns >= jump_at) s.stamp_ns += fromSec(5.0); }, nullptr,
-            &imu_only);
+  runOffice(
+      sim, {},
+      [&](std::size_t, ImuSample& s) {
+        if (s.stamp_ns >= jump_at) s.stamp_ns += fromSec(5.0);
+      },
+      nullptr, &imu_only);
   EXPECT_EQ(imu_only, 0u);
 }
 
@@ -195,7 +205,8 @@ TEST(InputGates, AJumpOfTheWholeStreamsTimeBaseIsARestartNotAGapToExtrapolate) {
 namespace mmlio::pipeline {
 
 /// The simulated office as a bag in the temp folder, without the IMU samples `keep_imu` refuses.
-std::string officeBag(const sim::Simulator& sim, const std::string& name, const std::function<bool(const ImuSample&)>& keep_imu) {
+std::string officeBag(const sim::Simulator& sim, const std::string& name,
+                      const std::function<bool(const ImuSample&)>& keep_imu) {
   const std::string path = (std::filesystem::temp_directory_path() / name).string();
   testing::writeSimBag(sim, path, keep_imu);
   return path;
@@ -303,7 +314,7 @@ TEST(RunBag, AnErrorBeforeAnyOutputLeavesNoFolderItCreatedButKeepsTheUsers) {
   options.out_dir = out.string();
   EXPECT_THROW(runBag(options), Error);
   EXPECT_FALSE(std::filesystem::exists(out.parent_path()));  // both levels it created
-  std::filesystem::create_directories(out);  // the user's own folder stays, empty or not
+  std::filesystem::create_directories(out);                  // the user's own folder stays, empty or not
   EXPECT_THROW(runBag(options), Error);
   EXPECT_TRUE(std::filesystem::is_directory(out));
   std::filesystem::remove_all(out.parent_path());
@@ -387,8 +398,14 @@ TEST(InputGates, ALossOfAllDataWhileTheRigAcceleratesOutOfATurnIsBridged) {
   const Stamp from = sim.startNs() + fromSec(10.0), to = from + fromSec(0.2);
   std::size_t degraded = 0;
   const Trajectory lost = runOffice(
-      sim, [&](int, LidarScan& s) { if (s.start_ns >= from && s.start_ns < to) s.start_ns = 0; },
-      [&](std::size_t, ImuSample& s) { if (s.stamp_ns >= from && s.stamp_ns < to) s.stamp_ns = 0; }, &degraded);
+      sim,
+      [&](int, LidarScan& s) {
+        if (s.start_ns >= from && s.start_ns < to) s.start_ns = 0;
+      },
+      [&](std::size_t, ImuSample& s) {
+        if (s.stamp_ns >= from && s.stamp_ns < to) s.stamp_ns = 0;
+      },
+      &degraded);
   const double clean_ate = eval::evaluate(sim.groundTruth(), clean).ate_rmse_m;
   const double lost_ate = eval::evaluate(sim.groundTruth(), lost).ate_rmse_m;
   std::printf("office 20 s: clean ATE %.4f m; 0.2 s of all data lost at 10 s: %.4f m, %zu degraded sweeps\n", clean_ate,
@@ -405,11 +422,17 @@ TEST(InputGates, ALossOfAllDataWhileATurnEndsIsBridgedByTryingSeveralTurns) {
   const Trajectory clean = runOffice(sim, {}, {});
   const Stamp from = sim.startNs() + fromSec(15.05), to = from + fromSec(0.4);
   const Trajectory lost = runOffice(
-      sim, [&](int, LidarScan& s) { if (s.start_ns >= from && s.start_ns < to) s.start_ns = 0; },
-      [&](std::size_t, ImuSample& s) { if (s.stamp_ns >= from && s.stamp_ns < to) s.stamp_ns = 0; });
+      sim,
+      [&](int, LidarScan& s) {
+        if (s.start_ns >= from && s.start_ns < to) s.start_ns = 0;
+      },
+      [&](std::size_t, ImuSample& s) {
+        if (s.stamp_ns >= from && s.stamp_ns < to) s.stamp_ns = 0;
+      });
   const double clean_ate = eval::evaluate(sim.groundTruth(), clean).ate_rmse_m;
   const double lost_ate = eval::evaluate(sim.groundTruth(), lost).ate_rmse_m;
-  std::printf("office 30 s: clean ATE %.4f m; 0.4 s of all data lost as the U-turn ends: %.4f m\n", clean_ate, lost_ate);
+  std::printf("office 30 s: clean ATE %.4f m; 0.4 s of all data lost as the U-turn ends: %.4f m\n", clean_ate,
+              lost_ate);
   EXPECT_LT(lost_ate, 2.0 * clean_ate) << "clean " << clean_ate;
 }
 
@@ -430,7 +453,9 @@ TEST(InputGates, SweepsWaitForAnImuThatStoppedAtMostTwoSeconds) {
   });
   testing::replay(
       sim, online, [&](int, LidarScan&) { ++fed; },
-      [&](std::size_t, ImuSample& s) { if (s.stamp_ns >= imu_ends) s.stamp_ns = 0; });
+      [&](std::size_t, ImuSample& s) {
+        if (s.stamp_ns >= imu_ends) s.stamp_ns = 0;
+      });
   const std::size_t bound = pipeline::OnlinePipeline::kMaxImuWaitNs / 100000000LL + 3;  // 10 Hz sweeps
   EXPECT_LE(online.waitingHighWater(), bound);
   EXPECT_GT(delivered_while_feeding, 50u);  // 10 s after the IMU stopped, less the last 2 s

@@ -21,7 +21,7 @@ struct Walk {
 /// and 3 cm of sideways drift per step (one or two sigmas of the pose graph's odometry edges).
 Walk roomWalk() {
   Walk w;
-  const std::vector<Eigen::Isometry3d> truth = {pose(-3, -2, 1, 0),         pose(0, -3, 1, 20 * kDeg),
+  const std::vector<Eigen::Isometry3d> truth = {pose(-3, -2, 1, 0),          pose(0, -3, 1, 20 * kDeg),
                                                 pose(3.5, -1, 1, 80 * kDeg), pose(3, 2.5, 1, 160 * kDeg),
                                                 pose(-1, 3, 1, 220 * kDeg),  pose(-3.05, -1.95, 1, 2 * kDeg)};
   w.truth = truth;

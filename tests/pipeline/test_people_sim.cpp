@@ -1,6 +1,6 @@
 // People walking past the rig in the simulated corridor (25 s: 8 m up the corridor and back,
-// four people pacing along it, as many as the held-out corridor had). What moves must neither pull the odometry nor stay in
-// the map, and the static surfaces must stay.
+// four people pacing along it, as many as the held-out corridor had). What moves must neither pull the odometry nor
+// stay in the map, and the static surfaces must stay.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -53,10 +53,11 @@ PeopleRun runCorridor(int people, bool handle_dynamic, double duration_s = 25.0)
   sim::MapScore score = sim::scoreMap(sim.scene(), map_gt);
   run.off_surface = map.empty() ? 1.0 : score.off_surface_fraction;
   run.on_surface = std::move(score.on_surface);
-  std::printf("corridor 25 s, %d people, dynamic handling %s: ATE %.4f m, map %.2f %% off the surfaces, %zu static "
-              "surface points, %zu feature points rejected, %zu map points removed\n",
-              people, handle_dynamic ? "on" : "off", run.eval.ate_rmse_m, 100 * run.off_surface, run.on_surface.size(),
-              run.rejected, run.removed);
+  std::printf(
+      "corridor 25 s, %d people, dynamic handling %s: ATE %.4f m, map %.2f %% off the surfaces, %zu static "
+      "surface points, %zu feature points rejected, %zu map points removed\n",
+      people, handle_dynamic ? "on" : "off", run.eval.ate_rmse_m, 100 * run.off_surface, run.on_surface.size(),
+      run.rejected, run.removed);
   return run;
 }
 
@@ -65,8 +66,8 @@ TEST(PeopleOnSimulation, WalkersNeitherPullTheOdometryNorStayInTheMapAndTheStati
   const PeopleRun ignored = runCorridor(4, false);
   const PeopleRun handled = runCorridor(4, true);
   EXPECT_LT(handled.eval.ate_rmse_m, 1.5 * empty.eval.ate_rmse_m);
-  EXPECT_GT(ignored.off_surface, 0.03);   // the people leave trails when nothing handles them ...
-  EXPECT_LT(handled.off_surface, 0.01);   // ... and none when the map is cleaned
+  EXPECT_GT(ignored.off_surface, 0.03);  // the people leave trails when nothing handles them ...
+  EXPECT_LT(handled.off_surface, 0.01);  // ... and none when the map is cleaned
   // No holes where nobody walked: the static surface the run without people maps is still there
   // (within 10 cm), but for what the people hid from every view of this short run.
   const double kept = sim::staticPointsKept(handled.on_surface, empty.on_surface);

@@ -73,7 +73,6 @@ TEST(RunReport, MarkdownShowsEveryFieldWithItsValue) {
   EXPECT_NE(md.find("| livox | 2 | 0 | 15 | 0 | 0 |"), std::string::npos);
 }
 
-
 TEST(RunReport, MappingStatesLoopClosureAndABackEndFailure) {
   RunReport r = sampleReport();
   r.mapping.enabled = true;

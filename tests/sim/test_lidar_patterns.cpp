@@ -43,7 +43,8 @@ TEST(VelodynePattern, HeadTurnsOnceClockwisePerSweep) {
 // Fraction of 0.5 x 0.5 deg cells of the field of view hit by beams of frames [0, n).
 double coverage(const LivoxConfig& c, int frames) {
   const double cell = 0.5;
-  const int nx = static_cast<int>(c.fov_horizontal_deg / cell) + 1, ny = static_cast<int>(c.fov_vertical_deg / cell) + 1;
+  const int nx = static_cast<int>(c.fov_horizontal_deg / cell) + 1,
+            ny = static_cast<int>(c.fov_vertical_deg / cell) + 1;
   std::vector<char> hit(nx * ny, 0);
   for (int k = 0; k < frames; ++k)
     for (const Beam& b : livoxBeams(c, k)) {
@@ -70,8 +71,8 @@ TEST(LivoxPattern, FrameHas24000BeamsOnSixLinesInsideTheFieldOfViewWithinOneTent
       EXPECT_GE(b.time_s, 0.f);
       EXPECT_LT(b.time_s, 0.1f);
       if (i > 0) {
-      EXPECT_GE(b.time_s, beams[i - 1].time_s);
-    }
+        EXPECT_GE(b.time_s, beams[i - 1].time_s);
+      }
       lines.insert(b.ring);
     }
     EXPECT_EQ(lines.size(), 6u);

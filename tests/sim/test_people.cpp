@@ -17,9 +17,7 @@ SimOptions withPeople(const std::string& scenario, int people, std::uint64_t see
   return o;
 }
 
-double distanceToBox(const Box& b, const Eigen::Vector3d& p) {
-  return (p.cwiseMax(b.lo).cwiseMin(b.hi) - p).norm();
-}
+double distanceToBox(const Box& b, const Eigen::Vector3d& p) { return (p.cwiseMax(b.lo).cwiseMin(b.hi) - p).norm(); }
 
 }  // namespace
 

@@ -26,9 +26,9 @@ namespace mmlio::backend {
 
 struct LoopResult {
   bool accepted = false;
-  int query = -1, match = -1;                                      // keyframe indices
+  int query = -1, match = -1;                                       // keyframe indices
   Eigen::Isometry3d T_match_query = Eigen::Isometry3d::Identity();  // for PoseGraph::addLoop(match, query, ...)
-  Matrix6d information = Matrix6d::Identity();                     // of T_match_query (dp, dtheta)
+  Matrix6d information = Matrix6d::Identity();                      // of T_match_query (dp, dtheta)
   double fitness_m = 0, overlap = 0;
   int candidates_tried = 0;
   std::string reason;  // why accepted / why the last candidate was rejected
@@ -37,16 +37,16 @@ struct LoopResult {
 class LoopCloser {
  public:
   struct Config {
-    double search_radius_m = 10.0;      // distance candidates: within this in the current estimate ...
-    double min_time_gap_s = 20.0;       // ... and at least this much older than the query
-    double max_fitness_m = 0.1;         // accept: mean |point-to-plane residual| at most this
-    double min_overlap = 0.5;           // accept: fraction of query points near the submap (0..1)
-    double icp_max_corr_m = 1.0;        // ICP correspondence gate at the coarsest level
-    int submap_keyframes = 5;           // keyframes around the candidate merged into the target
-    int max_distance_candidates = 3;    // nearest distance candidates verified per query
-    bool use_descriptor = true;         // also try the best Scan-Context match
+    double search_radius_m = 10.0;         // distance candidates: within this in the current estimate ...
+    double min_time_gap_s = 20.0;          // ... and at least this much older than the query
+    double max_fitness_m = 0.1;            // accept: mean |point-to-plane residual| at most this
+    double min_overlap = 0.5;              // accept: fraction of query points near the submap (0..1)
+    double icp_max_corr_m = 1.0;           // ICP correspondence gate at the coarsest level
+    int submap_keyframes = 5;              // keyframes around the candidate merged into the target
+    int max_distance_candidates = 3;       // nearest distance candidates verified per query
+    bool use_descriptor = true;            // also try the best Scan-Context match
     double max_descriptor_distance = 0.2;  // Scan-Context distance (0..1) below which it is a candidate
-    double submap_voxel_m = 0.1;        // target downsampling
+    double submap_voxel_m = 0.1;           // target downsampling
     // Reject below: degenerate direction (see IcpResult). Corridor-like places (weak along one
     // axis) give loops that slide: on the simulated corridor 0.03 raised the ATE 5.2 -> 10.7 cm.
     double min_translation_eigenvalue = 0.08;
@@ -54,12 +54,12 @@ class LoopCloser {
     // min_translation_eigenvalue are rejected before the ICP (0: never). The alignment changes it
     // by a few percent (docs/speed_history.md), so only clear cases are cut short.
     double prior_eigenvalue_fraction = 0.67;
-    double max_correction_m = 5.0;      // distance candidates: ICP may move the prior at most this ...
-    double max_correction_deg = 30.0;   // ... and rotate it at most this
+    double max_correction_m = 5.0;     // distance candidates: ICP may move the prior at most this ...
+    double max_correction_deg = 30.0;  // ... and rotate it at most this
     std::vector<double> ambiguity_shifts_m{1.5, 3.0, 4.5};  // restarts at +-these along both principal axes
-    double ambiguity_min_separation_m = 1.0;  // a restart ending this far from the solution is distinct
-    double ambiguity_fitness_ratio = 1.5;     // distinct and fitness within this factor ...
-    double ambiguity_overlap_ratio = 0.8;     // ... and overlap within this fraction: ambiguous
+    double ambiguity_min_separation_m = 1.0;                // a restart ending this far from the solution is distinct
+    double ambiguity_fitness_ratio = 1.5;                   // distinct and fitness within this factor ...
+    double ambiguity_overlap_ratio = 0.8;                   // ... and overlap within this fraction: ambiguous
     // Information of an accepted loop: a verified submap ICP is good to millimetres (5 mm /
     // 0.05 deg on the synthetic revisit test); 1 cm / 1 mrad keeps it a little softer than that
     // but stiffer than a few odometry edges (PoseGraph: 2 cm / 2 mrad each), so a loop corrects.

@@ -19,7 +19,6 @@
 
 namespace mmlio::backend {
 
-
 /// A registration target: points, a k-d tree over them and a normal per point (PCA of its
 /// neighbours; invalid where the neighbourhood is not a plane: edges, corners, scan lines).
 /// Normals are fitted when first asked for, so a target serves one alignment at a time (not
@@ -49,15 +48,15 @@ class IcpTarget {
 };
 
 struct IcpConfig {
-  double max_corr_coarse_m = 1.0;       // correspondence gate at the first level
-  double max_corr_fine_m = 0.25;        // ... at the last level (also the overlap gate)
-  double voxel_coarse_m = 0.5;          // source downsampling at the first level
-  double voxel_fine_m = 0.1;            // ... at the last level
-  int levels = 3;                       // gates and voxels interpolate geometrically
+  double max_corr_coarse_m = 1.0;  // correspondence gate at the first level
+  double max_corr_fine_m = 0.25;   // ... at the last level (also the overlap gate)
+  double voxel_coarse_m = 0.5;     // source downsampling at the first level
+  double voxel_fine_m = 0.1;       // ... at the last level
+  int levels = 3;                  // gates and voxels interpolate geometrically
   int max_iterations_per_level = 20;
-  double converged_translation_m = 1e-4;   // stop a level when the update is below both
+  double converged_translation_m = 1e-4;  // stop a level when the update is below both
   double converged_rotation_rad = 1e-5;
-  int min_correspondences = 30;         // fewer: the alignment fails
+  int min_correspondences = 30;  // fewer: the alignment fails
   // At most this many source points per level, evenly spaced in the downsampled cloud (0: all): a
   // 60 m hall keyframe at 0.1 m is tens of thousands of points, and the pose, fitness and overlap
   // of a rigid alignment are as well determined by a spread-out fraction of them.
@@ -65,12 +64,12 @@ struct IcpConfig {
 };
 
 struct IcpResult {
-  bool converged = false;               // enough correspondences at every level
+  bool converged = false;  // enough correspondences at every level
   Eigen::Isometry3d T_target_source = Eigen::Isometry3d::Identity();
-  double fitness_m = 0;                 // mean |point-to-plane residual| of the final correspondences
-  double overlap = 0;                   // fraction of fine source points within max_corr_fine_m of the target
-  int correspondences = 0;              // final, with a valid normal
-  int iterations = 0;                   // over all levels
+  double fitness_m = 0;     // mean |point-to-plane residual| of the final correspondences
+  double overlap = 0;       // fraction of fine source points within max_corr_fine_m of the target
+  int correspondences = 0;  // final, with a valid normal
+  int iterations = 0;       // over all levels
   Eigen::Matrix<double, 6, 6> hessian_normalised = Eigen::Matrix<double, 6, 6>::Zero();  // J^T J / N
   double min_translation_eigenvalue = 0;  // of its translation block: 0 = unconstrained, 1/3 = isotropic
   Eigen::Vector3d weakest_translation_direction = Eigen::Vector3d::UnitX();  // in the target frame

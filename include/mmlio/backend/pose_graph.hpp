@@ -25,7 +25,7 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 struct KeyframeNode {
   Stamp stamp_ns = 0;
   Eigen::Isometry3d T_world_body_odom = Eigen::Isometry3d::Identity();  // pose from the odometry
-  std::vector<Eigen::Vector3d> cloud_body;  // downsampled de-skewed points, body frame (m)
+  std::vector<Eigen::Vector3d> cloud_body;                              // downsampled de-skewed points, body frame (m)
 };
 
 /// Information (inverse covariance, tangent order dp, dtheta) of independent isotropic noise.
@@ -46,7 +46,7 @@ class PoseGraph {
     // verified (ICP fitness, overlap, uniqueness, plausible correction), and a genuine one is many
     // sigmas off the drifted estimate: at 1 sigma a 1.5 deg loop left a quarter of it uncorrected.
     double loop_huber = 10.0;
-    int max_iterations = 50;                 // Levenberg-Marquardt iterations per optimize()
+    int max_iterations = 50;  // Levenberg-Marquardt iterations per optimize()
   };
 
   PoseGraph();  // default Config (a nested Config with initialisers cannot be a default argument in GCC)

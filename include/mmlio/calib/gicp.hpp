@@ -21,36 +21,34 @@
 namespace mmlio::calib {
 
 struct GicpConfig {
-  int covariance_neighbours = 20;          // k of the neighbourhood of each point's covariance
-  double plane_epsilon = 1e-3;             // smallest normalised eigenvalue (thickness of the disc)
-  bool source_covariances = true;          // false: source points are exact (point-to-distribution);
-                                           // use it for sparse sources such as 16-ring sweeps
-  double max_corr_dist_coarse_m = 1.0;     // correspondence gate at the first level
-  double max_corr_dist_fine_m = 0.2;       // ... at the last level (also the overlap gate)
-  int levels = 3;                          // gates interpolate geometrically
+  int covariance_neighbours = 20;       // k of the neighbourhood of each point's covariance
+  double plane_epsilon = 1e-3;          // smallest normalised eigenvalue (thickness of the disc)
+  bool source_covariances = true;       // false: source points are exact (point-to-distribution);
+                                        // use it for sparse sources such as 16-ring sweeps
+  double max_corr_dist_coarse_m = 1.0;  // correspondence gate at the first level
+  double max_corr_dist_fine_m = 0.2;    // ... at the last level (also the overlap gate)
+  int levels = 3;                       // gates interpolate geometrically
   int max_iterations_per_level = 30;
-  double converged_translation_m = 1e-5;   // a level stops when the update is below both
+  double converged_translation_m = 1e-5;  // a level stops when the update is below both
   double converged_rotation_rad = 1e-6;
-  int min_correspondences = 50;            // fewer at any iteration: not converged
+  int min_correspondences = 50;  // fewer at any iteration: not converged
 };
 
 struct GicpResult {
-  bool converged = false;                  // enough correspondences throughout and the last update small
+  bool converged = false;  // enough correspondences throughout and the last update small
   Eigen::Isometry3d T_target_source = Eigen::Isometry3d::Identity();
-  double fitness_m = 0;                    // mean Euclidean distance of the final inliers
-  double overlap = 0;                      // fraction of source points with a target point within the fine gate
-  int inliers = 0;                         // correspondences at the fine gate
-  int iterations = 0;                      // over all levels
+  double fitness_m = 0;  // mean Euclidean distance of the final inliers
+  double overlap = 0;    // fraction of source points with a target point within the fine gate
+  int inliers = 0;       // correspondences at the fine gate
+  int iterations = 0;    // over all levels
   Eigen::Matrix<double, 6, 6> hessian = Eigen::Matrix<double, 6, 6>::Zero();  // J^T C^-1 J at the end,
-                                           // tangent (dp, dtheta), left perturbation
+                                                                              // tangent (dp, dtheta), left perturbation
 };
 
 /// Plane-regularised covariance of every point from its k nearest neighbours in `points`.
-std::vector<Eigen::Matrix3d> planeCovariances(const std::vector<Eigen::Vector3d>& points, int k,
-                                              double plane_epsilon);
+std::vector<Eigen::Matrix3d> planeCovariances(const std::vector<Eigen::Vector3d>& points, int k, double plane_epsilon);
 
 GicpResult gicp(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
                 const Eigen::Isometry3d& T_target_source_guess, const GicpConfig& cfg = GicpConfig());
-
 
 }  // namespace mmlio::calib

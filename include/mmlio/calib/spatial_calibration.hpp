@@ -18,17 +18,17 @@ namespace mmlio::calib {
 struct SpatialCalibrationConfig {
   double solid_fov_horizontal_deg = 81.7;  // the solid-state field of view: the overlap region
   double solid_fov_vertical_deg = 25.1;
-  double fov_margin_deg = 5.0;             // spinning points this far outside the FOV are kept too
-  double min_range_m = 1.0;                // closer returns are dropped (rig, operator)
+  double fov_margin_deg = 5.0;  // spinning points this far outside the FOV are kept too
+  double min_range_m = 1.0;     // closer returns are dropped (rig, operator)
   double max_range_m = 40.0;
-  double target_voxel_m = 0.05;            // accumulated solid-state cloud
-  double source_voxel_m = 0.05;            // spinning sweep
-  double yaw_step_deg = 15.0;              // yaw search grid
-  double max_fitness_m = 0.05;             // accept: mean inlier distance at most this ...
-  double min_overlap = 0.5;                // ... and this fraction of cropped spinning points matched
-  int min_points = 500;                    // fewer points on either side: refuse
+  double target_voxel_m = 0.05;                // accumulated solid-state cloud
+  double source_voxel_m = 0.05;                // spinning sweep
+  double yaw_step_deg = 15.0;                  // yaw search grid
+  double max_fitness_m = 0.05;                 // accept: mean inlier distance at most this ...
+  double min_overlap = 0.5;                    // ... and this fraction of cropped spinning points matched
+  int min_points = 500;                        // fewer points on either side: refuse
   double min_translation_conditioning = 0.05;  // weakest / strongest translation eigenvalue of the GICP
-                                              // Hessian below this: degenerate overlap (a wall), refuse
+                                               // Hessian below this: degenerate overlap (a wall), refuse
   GicpConfig gicp = [] {
     GicpConfig g;
     g.source_covariances = false;  // a 16-ring sweep is too sparse across rings for its own covariances
@@ -40,7 +40,7 @@ struct SpatialCalibrationConfig {
 
 struct SpatialCalibrationResult {
   bool ok = false;
-  std::string message;                     // what was found, or why it was refused
+  std::string message;  // what was found, or why it was refused
   Eigen::Isometry3d T_solid_spinning = Eigen::Isometry3d::Identity();
   double fitness_m = 0, overlap = 0;
   int spinning_points = 0, solid_points = 0;  // used, after cropping and voxel filtering

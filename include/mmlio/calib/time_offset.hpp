@@ -41,10 +41,10 @@ std::vector<SensorRotation> sweepRotations(const std::vector<LidarScan>& sweeps,
                                            const GyroDeskew* deskew = nullptr);
 
 struct TimeOffsetConfig {
-  double max_offset_s = 0.2;     // search range +-
-  double step_s = 0.001;         // grid step (refined by a parabola)
-  double min_rate_rad_s = 0.2;   // increments turning slower than this carry no timing information
-  int min_increments = 10;       // fewer moving increments: refuse
+  double max_offset_s = 0.2;    // search range +-
+  double step_s = 0.001;        // grid step (refined by a parabola)
+  double min_rate_rad_s = 0.2;  // increments turning slower than this carry no timing information
+  int min_increments = 10;      // fewer moving increments: refuse
 };
 
 struct TimeOffsetResult {

@@ -6,8 +6,7 @@
 namespace mmlio {
 
 /// static_cast<Int>(std::floor(v)), for every finite v whose floor Int holds.
-template <typename Int, typename Real>
-inline Int floorTo(Real v) {
+template <typename Int, typename Real> inline Int floorTo(Real v) {
   const Int truncated = static_cast<Int>(v);  // toward zero
   return truncated - static_cast<Int>(v < static_cast<Real>(truncated));
 }

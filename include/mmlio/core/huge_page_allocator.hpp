@@ -14,19 +14,17 @@
 
 namespace mmlio {
 
-template <class T>
-struct HugePageAllocator {
+template <class T> struct HugePageAllocator {
   using value_type = T;
   static constexpr std::size_t kHugePage = std::size_t{2} << 20;
 
   HugePageAllocator() = default;
-  template <class U>
-  HugePageAllocator(const HugePageAllocator<U>&) noexcept {}
+  template <class U> HugePageAllocator(const HugePageAllocator<U>&) noexcept {}
 
   T* allocate(std::size_t n) {
     const std::size_t bytes = n * sizeof(T);
     if (bytes < kHugePage) {
-      void* p = ::operator new(bytes, std::align_val_t{alignof(T) > 16 ? alignof(T) : 16});
+      void* p = ::operator new (bytes, std::align_val_t{alignof(T) > 16 ? alignof(T) : 16});
       return static_cast<T*>(p);
     }
     const std::size_t rounded = (bytes + kHugePage - 1) / kHugePage * kHugePage;
@@ -40,16 +38,14 @@ struct HugePageAllocator {
 
   void deallocate(T* p, std::size_t n) noexcept {
     if (n * sizeof(T) < kHugePage) {
-      ::operator delete(p, std::align_val_t{alignof(T) > 16 ? alignof(T) : 16});
+      ::operator delete (p, std::align_val_t{alignof(T) > 16 ? alignof(T) : 16});
       return;
     }
     std::free(p);
   }
 
-  template <class U>
-  bool operator==(const HugePageAllocator<U>&) const noexcept { return true; }
-  template <class U>
-  bool operator!=(const HugePageAllocator<U>&) const noexcept { return false; }
+  template <class U> bool operator==(const HugePageAllocator<U>&) const noexcept { return true; }
+  template <class U> bool operator!=(const HugePageAllocator<U>&) const noexcept { return false; }
 };
 
 }  // namespace mmlio

@@ -22,8 +22,7 @@ void write(Level level, const std::string& message);
 /// float format would print 1.7e+09, the same for every stamp of a run.
 std::string stampText(std::int64_t stamp_ns);
 
-template <typename... Args>
-void emit(Level level, const Args&... args) {
+template <typename... Args> void emit(Level level, const Args&... args) {
   if (level < minLevel()) return;
   std::ostringstream os;
   (os << ... << args);

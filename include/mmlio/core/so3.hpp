@@ -40,8 +40,7 @@ inline Eigen::Matrix3d rightJacobianInverse(const Eigen::Vector3d& w) {
   const double a = w.norm();
   const Eigen::Matrix3d W = hat(w);
   if (a < 1e-6) return Eigen::Matrix3d::Identity() + 0.5 * W;
-  return Eigen::Matrix3d::Identity() + 0.5 * W +
-         (1.0 / (a * a) - (1 + std::cos(a)) / (2 * a * std::sin(a))) * W * W;
+  return Eigen::Matrix3d::Identity() + 0.5 * W + (1.0 / (a * a) - (1 + std::cos(a)) / (2 * a * std::sin(a))) * W * W;
 }
 
 }  // namespace mmlio::so3

@@ -32,9 +32,9 @@ enum class LidarKind { kSpinning, kSolidState };
 
 /// One sweep (spinning) or frame (solid state) of one LiDAR.
 struct LidarScan {
-  std::string sensor;          // config name, e.g. "velodyne", "livox"
-  Stamp start_ns = 0;          // time of the first point (sweep start)
-  std::vector<Point> points;   // sorted by time_s, time_s >= 0
+  std::string sensor;         // config name, e.g. "velodyne", "livox"
+  Stamp start_ns = 0;         // time of the first point (sweep start)
+  std::vector<Point> points;  // sorted by time_s, time_s >= 0
 
   /// Duration covered by the points, s.
   double durationS() const { return points.empty() ? 0.0 : points.back().time_s; }
@@ -57,9 +57,9 @@ struct ImuBias {
 /// State of the IMU (body) frame in the gravity-aligned world frame.
 struct NavState {
   Stamp stamp_ns = 0;
-  Eigen::Vector3d p_world = Eigen::Vector3d::Zero();                // m
+  Eigen::Vector3d p_world = Eigen::Vector3d::Zero();  // m
   Eigen::Quaterniond q_world_body = Eigen::Quaterniond::Identity();
-  Eigen::Vector3d v_world = Eigen::Vector3d::Zero();                // m/s
+  Eigen::Vector3d v_world = Eigen::Vector3d::Zero();  // m/s
   ImuBias bias;
 
   Eigen::Isometry3d pose() const {
@@ -79,10 +79,10 @@ using Trajectory = std::vector<StampedPose>;
 
 /// Static description of one LiDAR of the rig.
 struct LidarExtrinsic {
-  std::string name;                                           // "velodyne", "livox"
+  std::string name;  // "velodyne", "livox"
   LidarKind kind = LidarKind::kSpinning;
   Eigen::Isometry3d T_imu_sensor = Eigen::Isometry3d::Identity();  // sensor -> IMU frame
-  double time_offset_s = 0.0;                                 // t_imu = t_stamp + offset
+  double time_offset_s = 0.0;                                      // t_imu = t_stamp + offset
 };
 
 }  // namespace mmlio

@@ -26,8 +26,8 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 /// and unit-direction edge residuals, no 1/sigma^2). Matches whose residual at T exceeds
 /// inlier_m are left out: a robust loss gives them no weight either.
 /// source >= 0: only the matches of that LiDAR.
-Matrix6d matchInformation(const std::vector<MapMatch>& matches, const Eigen::Isometry3d& T_world_body,
-                          double inlier_m, int source = -1);
+Matrix6d matchInformation(const std::vector<MapMatch>& matches, const Eigen::Isometry3d& T_world_body, double inlier_m,
+                          int source = -1);
 
 struct DegeneracyConfig {
   // A translation direction, or a rotation axis (per metre of lever arm), worth fewer effective
@@ -48,9 +48,9 @@ struct DegeneracyConfig {
 
 struct Degeneracy {
   bool translation_degenerate = false, rotation_degenerate = false;
-  double translation_points = 0.0;                             // weakest translation eigenvalue
-  double rotation_points = 0.0;                                // weakest rotation eigenvalue
-  Eigen::Vector3d weak_translation = Eigen::Vector3d::UnitX();  // its direction (world frame)
+  double translation_points = 0.0;                                  // weakest translation eigenvalue
+  double rotation_points = 0.0;                                     // weakest rotation eigenvalue
+  Eigen::Vector3d weak_translation = Eigen::Vector3d::UnitX();      // its direction (world frame)
   Eigen::Matrix3d translation_basis = Eigen::Matrix3d::Identity();  // eigenvectors, ascending
   Eigen::Vector3d translation_eigenvalues = Eigen::Vector3d::Zero();
   Eigen::Vector3d translation_thresholds = Eigen::Vector3d::Zero();  // below which each is degenerate

@@ -12,9 +12,9 @@
 namespace mmlio::estimator {
 
 struct FeatureBudget {
-  std::size_t max_edges = 0;   // 0: no limit
+  std::size_t max_edges = 0;  // 0: no limit
   std::size_t max_planes = 0;
-  double edge_cell_m = 0.2;    // the thinning grid starts at the features' own voxel ...
+  double edge_cell_m = 0.2;  // the thinning grid starts at the features' own voxel ...
   double plane_cell_m = 0.3;
 };
 

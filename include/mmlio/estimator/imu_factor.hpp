@@ -10,7 +10,8 @@
 //   r_v  = Ri^T (vj - vi - g T) - dv
 //   r_ba = ba_j - ba_i,  r_bg = bg_j - bg_i
 // and the cost is L^T r with L L^T = covariance^-1 (whitened). The Jacobians are exact
-// derivatives of this residual at any residual (incl. the normalisation in the gyro-bias correction), checked against numeric differences.
+// derivatives of this residual at any residual (incl. the normalisation in the gyro-bias correction), checked against
+// numeric differences.
 #include <ceres/ceres.h>
 
 #include <Eigen/Core>

@@ -23,8 +23,7 @@ namespace mmlio::estimator {
 class PointToPlaneFactor : public ceres::SizedCostFunction<1, 7> {
  public:
   /// n . x + d = 0 is the plane in the world frame; normal_world should be unit length.
-  PointToPlaneFactor(const Eigen::Vector3d& p_body, const Eigen::Vector3d& normal_world, double d,
-                     double weight = 1.0);
+  PointToPlaneFactor(const Eigen::Vector3d& p_body, const Eigen::Vector3d& normal_world, double d, double weight = 1.0);
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:

@@ -43,10 +43,10 @@ int tangentSize(int global_size);
 std::unordered_map<long, double*> addressShift(const std::vector<double*>& from, const std::vector<double*>& to);
 
 struct ResidualBlockInfo {
-  ceres::CostFunction* cost = nullptr;   // owned by MarginalizationInfo once added
-  ceres::LossFunction* loss = nullptr;   // may be nullptr; owned once added (shared pointers ok)
-  std::vector<double*> blocks;           // parameter blocks, in the cost's order
-  std::vector<int> drop_indices;         // indices into blocks of the blocks to marginalise
+  ceres::CostFunction* cost = nullptr;  // owned by MarginalizationInfo once added
+  ceres::LossFunction* loss = nullptr;  // may be nullptr; owned once added (shared pointers ok)
+  std::vector<double*> blocks;          // parameter blocks, in the cost's order
+  std::vector<int> drop_indices;        // indices into blocks of the blocks to marginalise
 };
 
 class MarginalizationInfo {
@@ -74,7 +74,7 @@ class MarginalizationInfo {
   bool valid() const;
 
   // The stored prior (in kept-block order).
-  const std::vector<int>& keptBlockSizes() const { return kept_sizes_; }           // global sizes
+  const std::vector<int>& keptBlockSizes() const { return kept_sizes_; }  // global sizes
   const std::vector<int>& keptBlockTangentOffsets() const { return kept_offsets_; }
   const std::vector<Eigen::VectorXd>& keptBlockValues() const { return kept_values_; }  // x0
   int keptTangentSize() const { return kept_dim_; }
@@ -86,8 +86,8 @@ class MarginalizationInfo {
  private:
   struct Factor {
     ResidualBlockInfo info;
-    Eigen::VectorXd residual;                 // after loss correction
-    std::vector<Eigen::MatrixXd> jacobians;   // tangent columns, after loss correction
+    Eigen::VectorXd residual;                // after loss correction
+    std::vector<Eigen::MatrixXd> jacobians;  // tangent columns, after loss correction
   };
   std::vector<Factor> factors_;
   double eigenvalue_floor_;

@@ -39,8 +39,8 @@ struct OdometryConfig {
   double gravity_m_s2 = 9.81;
   lidar::FeatureConfig features;
   lidar::BadFrameConfig bad_frame;
-  double edge_voxel_m = 0.2;            // downsampling of merged edge features
-  double plane_voxel_m = 0.3;           // downsampling of merged plane features
+  double edge_voxel_m = 0.2;   // downsampling of merged edge features
+  double plane_voxel_m = 0.3;  // downsampling of merged plane features
   // Registration of a sweep matches at most this many features (thinned on a coarser grid; 0: all);
   // keyframes' window optimisation and the map use all. Off by default: it costs accuracy (docs/speed_history.md).
   int registration_max_edges = 0;
@@ -86,26 +86,26 @@ struct LidarFrameStats {
 struct SweepResult {
   enum class Status { kInitializing, kTracking, kDegraded };
   Status status = Status::kInitializing;
-  NavState state;                       // IMU state at the window end (valid unless initialising)
+  NavState state;  // IMU state at the window end (valid unless initialising)
   bool keyframe = false;
   std::vector<LidarFrameStats> lidars;
   std::size_t correspondences = 0;
-  Degeneracy degeneracy;                // of the scan-to-map registration (valid when registered)
-  bool registered = false;              // matched against the map (not the first sweep, not degraded)
-  int remapped_directions = 0;          // directions where the IMU prediction was kept
+  Degeneracy degeneracy;        // of the scan-to-map registration (valid when registered)
+  bool registered = false;      // matched against the map (not the first sweep, not degraded)
+  int remapped_directions = 0;  // directions where the IMU prediction was kept
   // How far the position may have drifted along what the LiDARs have not observed lately: the
   // largest standard deviation of PredictionDrift after this sweep, m (0 when drift_m_s2 is 0).
   double drift_sigma_m = 0.0;
-  std::vector<Point> points_body;       // de-skewed points in the body frame at the window end
-  bool points_body_thinned = false;     // ... only those the map takes (the mapping back end's hand-off)
+  std::vector<Point> points_body;          // de-skewed points in the body frame at the window end
+  bool points_body_thinned = false;        // ... only those the map takes (the mapping back end's hand-off)
   std::vector<Point> points_dynamic_body;  // ... those on things that moved in (left out of points_body)
-  std::size_t dynamic_points = 0;       // feature points rejected as moved in (registration, window, map)
-  std::size_t carved_points = 0;        // local map points this sweep saw through (keyframes)
+  std::size_t dynamic_points = 0;          // feature points rejected as moved in (registration, window, map)
+  std::size_t carved_points = 0;           // local map points this sweep saw through (keyframes)
   // World positions where something moved this sweep: rejected features (with their neighbours)
   // and carved local-map points. The map's ghost removal judges only near these.
   std::vector<Eigen::Vector3d> moved_world;
   std::shared_ptr<const SweepView> view;  // what each LiDAR saw, placed at the final state (dynamic.enabled)
-  std::string note;                     // why degraded
+  std::string note;                       // why degraded
   StageTimes times_ms;
 };
 

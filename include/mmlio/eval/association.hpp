@@ -16,9 +16,9 @@ namespace mmlio::eval {
 
 /// One estimate pose and the ground truth at the same instant.
 struct AssociatedPose {
-  Stamp stamp_ns = 0;                                            // the estimate's stamp
-  Eigen::Isometry3d T_world_gt = Eigen::Isometry3d::Identity();  // GT, interpolated
-  Eigen::Isometry3d T_world_est = Eigen::Isometry3d::Identity(); // estimate, as given
+  Stamp stamp_ns = 0;                                             // the estimate's stamp
+  Eigen::Isometry3d T_world_gt = Eigen::Isometry3d::Identity();   // GT, interpolated
+  Eigen::Isometry3d T_world_est = Eigen::Isometry3d::Identity();  // estimate, as given
 };
 
 /// Pose between `a` and `b` at `stamp_ns` (a.stamp_ns <= stamp_ns <= b.stamp_ns):

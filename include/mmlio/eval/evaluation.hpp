@@ -34,12 +34,12 @@ struct EvalResult {
   double path_length_m = 0.0;    // GT path length over the associated poses
   double scale = 1.0;            // alignment scale (1 unless EvalOptions::scale)
 
-  std::vector<double> times_s;   // per associated pose: seconds since the first GT pose
-  std::vector<double> errors_m;  // per associated pose: position error after alignment
+  std::vector<double> times_s;                                 // per associated pose: seconds since the first GT pose
+  std::vector<double> errors_m;                                // per associated pose: position error after alignment
   Eigen::Isometry3d T_gt_est = Eigen::Isometry3d::Identity();  // estimate world -> GT world (positions)
   Eigen::Isometry3d T_gt_est_pose = Eigen::Isometry3d::Identity();  // ... from positions and attitudes
-  std::vector<Eigen::Vector3d> gt_xyz;           // associated GT positions
-  std::vector<Eigen::Vector3d> est_xyz_aligned;  // associated estimate positions, aligned
+  std::vector<Eigen::Vector3d> gt_xyz;                              // associated GT positions
+  std::vector<Eigen::Vector3d> est_xyz_aligned;                     // associated estimate positions, aligned
 };
 
 /// Evaluates `est` against `gt`. Throws mmlio::Error when fewer than 3 poses associate

@@ -16,15 +16,15 @@ namespace mmlio::eval {
 class Plot2D {
  public:
   struct Config {
-    std::string title;           // drawn above the axes (may be empty)
-    std::string x_label;         // e.g. "x [m]"
-    std::string y_label;         // drawn vertically left of the y ticks
-    bool equal_aspect = false;   // same metres per pixel on both axes (top views)
-    bool legend = true;          // legend box for labelled series
+    std::string title;          // drawn above the axes (may be empty)
+    std::string x_label;        // e.g. "x [m]"
+    std::string y_label;        // drawn vertically left of the y ticks
+    bool equal_aspect = false;  // same metres per pixel on both axes (top views)
+    bool legend = true;         // legend box for labelled series
     enum class Corner { kTopRight, kTopLeft, kBottomRight, kBottomLeft };
     Corner legend_corner = Corner::kTopRight;  // where the legend sits inside the axes
-    int text_scale = 2;          // font pixel size of ticks and labels
-    double margin_fraction = 0.04;  // data-range padding on each side when ranges are automatic
+    int text_scale = 2;                        // font pixel size of ticks and labels
+    double margin_fraction = 0.04;             // data-range padding on each side when ranges are automatic
   };
 
   explicit Plot2D(Config config) : config_(std::move(config)) {}

@@ -8,9 +8,9 @@
 namespace mmlio::eval {
 
 struct RelativeError {
-  double translation_pct = 0.0;    // mean ||relative translation error|| / segment path length, %
-  double rotation_deg_per_m = 0.0; // mean relative rotation angle / segment path length, deg/m
-  size_t num_segments = 0;         // 0 when the GT path is shorter than one segment (means are NaN)
+  double translation_pct = 0.0;     // mean ||relative translation error|| / segment path length, %
+  double rotation_deg_per_m = 0.0;  // mean relative rotation angle / segment path length, deg/m
+  size_t num_segments = 0;          // 0 when the GT path is shorter than one segment (means are NaN)
 };
 
 /// For every start index i, the segment ends at the first j whose GT path length from i reaches

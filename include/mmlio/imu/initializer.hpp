@@ -10,10 +10,10 @@
 namespace mmlio::imu {
 
 struct ImuInitConfig {
-  double duration_s = 1.0;            // standstill window
+  double duration_s = 1.0;  // standstill window
   // Standstill test on the spread of 0.1-window-long block means (white noise averages out):
-  double max_gyro_std_rad_s = 0.02;   // above: the rig is turning
-  double max_acc_std_m_s2 = 0.2;      // above: the rig is accelerating
+  double max_gyro_std_rad_s = 0.02;  // above: the rig is turning
+  double max_acc_std_m_s2 = 0.2;     // above: the rig is accelerating
   // A constant turn (turntable, steady curve) leaves the block means still: rates above any
   // plausible MEMS gyroscope bias are motion, not bias.
   double max_gyro_bias_rad_s = 0.1;
@@ -29,10 +29,10 @@ struct ImuInitResult {
   bool ok = false;
   Eigen::Quaterniond q_world_imu = Eigen::Quaterniond::Identity();  // gravity along -z, yaw 0
   Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();
-  double gravity_norm_m_s2 = 0.0;     // |mean acc| over the window, times acc_scale
-  double acc_scale = 1.0;             // 9.80665 when the accelerations looked like g (|mean| < 3)
-  bool forced = false;                // initialised while moving (gyro bias left at 0)
-  std::string message;                // summary, or why not ready
+  double gravity_norm_m_s2 = 0.0;  // |mean acc| over the window, times acc_scale
+  double acc_scale = 1.0;          // 9.80665 when the accelerations looked like g (|mean| < 3)
+  bool forced = false;             // initialised while moving (gyro bias left at 0)
+  std::string message;             // summary, or why not ready
 };
 
 class ImuInitializer {

@@ -31,8 +31,8 @@ struct SourceLidar {
 };
 
 struct BagSourceOptions {
-  std::string imu_topic;            // empty: no IMU stream
-  std::string acc_unit = "auto";    // auto | g | m/s2; auto: mean |acc| of the first 50 messages < 3 -> g
+  std::string imu_topic;          // empty: no IMU stream
+  std::string acc_unit = "auto";  // auto | g | m/s2; auto: mean |acc| of the first 50 messages < 3 -> g
   std::vector<SourceLidar> lidars;
 };
 
@@ -61,14 +61,14 @@ class BagSource {
   /// counted and logged once per topic; a read error mid-bag ends the stream with one warning.
   bool next(SensorEvent* event);
 
-  double accScale() const;         // multiplier applied to raw IMU acc: 1 or 9.80665
-  double progress() const;         // 0..1 by bag time
-  Stamp beginNs() const;           // first message of the streamed topics (bag time)
-  Stamp endNs() const;             // last message of the streamed topics (bag time)
+  double accScale() const;                                  // multiplier applied to raw IMU acc: 1 or 9.80665
+  double progress() const;                                  // 0..1 by bag time
+  Stamp beginNs() const;                                    // first message of the streamed topics (bag time)
+  Stamp endNs() const;                                      // last message of the streamed topics (bag time)
   const std::map<std::string, DecodeStats>& stats() const;  // per LiDAR name
-  std::size_t imuCount() const;    // IMU samples delivered so far
-  std::size_t skippedMessages() const;  // messages that failed to deserialise
-  bool truncated() const;          // unindexed/truncated bag read from its chunks, or a read error ended the stream
+  std::size_t imuCount() const;                             // IMU samples delivered so far
+  std::size_t skippedMessages() const;                      // messages that failed to deserialise
+  bool truncated() const;             // unindexed/truncated bag read from its chunks, or a read error ended the stream
   std::size_t damagedChunks() const;  // damaged stretches skipped: reading went on at the next intact chunk
 
  private:

@@ -23,7 +23,7 @@ namespace mmlio::io {
 
 struct SensorCalibration {
   Eigen::Isometry3d T_imu_sensor = Eigen::Isometry3d::Identity();  // sensor -> IMU frame
-  double time_offset_s = 0.0;                                       // t_imu = t_stamp + offset, s
+  double time_offset_s = 0.0;                                      // t_imu = t_stamp + offset, s
 };
 
 using Calibration = std::map<std::string, SensorCalibration>;

@@ -29,12 +29,12 @@
 namespace mmlio::io {
 
 struct CloudDecodeOptions {
-  std::string sensor;                    // copied into LidarScan::sensor
+  std::string sensor;  // copied into LidarScan::sensor
   LidarKind kind = LidarKind::kSpinning;
-  double min_range_m = 0.5;              // closer returns are dropped
-  double max_range_m = 100.0;            // farther returns are dropped
-  int num_rings = 16;                    // rings assumed when the cloud has no `ring` field
-  double scan_period_s = 0.1;            // one turn, for times from the azimuth (no time field)
+  double min_range_m = 0.5;    // closer returns are dropped
+  double max_range_m = 100.0;  // farther returns are dropped
+  int num_rings = 16;          // rings assumed when the cloud has no `ring` field
+  double scan_period_s = 0.1;  // one turn, for times from the azimuth (no time field)
 };
 
 /// Throws mmlio::Error when the cloud lacks x/y/z or its data is shorter than its size says.

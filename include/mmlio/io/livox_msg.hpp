@@ -19,17 +19,17 @@ namespace mmlio::io {
 
 /// One Livox return.
 struct LivoxCustomPoint {
-  std::uint32_t offset_time = 0;  // ns after CustomMsg::timebase
+  std::uint32_t offset_time = 0;    // ns after CustomMsg::timebase
   float x = 0.f, y = 0.f, z = 0.f;  // m, sensor frame
-  std::uint8_t reflectivity = 0;  // 0..255
-  std::uint8_t tag = 0;           // Livox return tag (0x10: single return, normal)
-  std::uint8_t line = 0;          // laser line (Horizon: 0..5)
+  std::uint8_t reflectivity = 0;    // 0..255
+  std::uint8_t tag = 0;             // Livox return tag (0x10: single return, normal)
+  std::uint8_t line = 0;            // laser line (Horizon: 0..5)
 };
 
 /// One Livox frame.
 struct LivoxCustomMsg {
   std_msgs::Header header;
-  std::uint64_t timebase = 0;     // ns, time of the first point
+  std::uint64_t timebase = 0;  // ns, time of the first point
   std::uint32_t point_num = 0;
   std::uint8_t lidar_id = 0;
   boost::array<std::uint8_t, 3> rsvd{{0, 0, 0}};

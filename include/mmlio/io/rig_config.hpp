@@ -24,7 +24,7 @@ struct LidarConfig {
   std::string type;   // velodyne | ouster | hesai | generic_spinning (PointCloud2) | livox (CustomMsg)
   std::string topic;  // ROS topic of the point clouds
   Eigen::Isometry3d T_imu_sensor = Eigen::Isometry3d::Identity();  // sensor -> IMU frame
-  double time_offset_s = 0.0;  // t_imu = t_stamp + time_offset_s
+  double time_offset_s = 0.0;                                      // t_imu = t_stamp + time_offset_s
   double min_range_m = 0.5;    // returns closer than this are dropped (rig, vehicle)
   double max_range_m = 100.0;  // returns farther than this are dropped
   int num_rings = 16;          // laser rings (VLP-16: 16) or Livox scan lines (Horizon: 6)
@@ -37,19 +37,19 @@ struct LidarConfig {
 /// (RigConfig::estimator), bound under the same `imu:` section.
 struct ImuConfig {
   std::string topic = "/livox/imu";
-  std::string acc_unit = "auto";           // auto | g | m/s2 (Livox reports g)
+  std::string acc_unit = "auto";  // auto | g | m/s2 (Livox reports g)
 };
 
 struct OutputConfig {
-  bool write_kitti = false;        // also write trajectory.kitti + times.txt
+  bool write_kitti = false;  // also write trajectory.kitti + times.txt
 };
 
 /// The two LiDARs of the reference rig (Velodyne VLP-16 + Livox Horizon with its built-in IMU).
 std::vector<LidarConfig> defaultLidars();
 
 struct RigConfig {
-  std::string mode = "hvi";                // hvi (all LiDARs) | vi (spinning only) | hi (solid state only)
-  std::string calibration = "config";      // config | auto | path to a calibration YAML
+  std::string mode = "hvi";                  // hvi (all LiDARs) | vi (spinning only) | hi (solid state only)
+  std::string calibration = "config";        // config | auto | path to a calibration YAML
   std::string reference_lidar = "velodyne";  // its sweeps set the fusion window
   ImuConfig imu;
   std::vector<LidarConfig> lidars = defaultLidars();
@@ -59,7 +59,7 @@ struct RigConfig {
   // ... loop, dynamic.clean_map, output.map_voxel_m / per_lidar_maps / dynamic_map.
   backend::MappingConfig mapping;
   OutputConfig output;
-  std::string source_path;                 // file it was loaded from (not a YAML key)
+  std::string source_path;  // file it was loaded from (not a YAML key)
 };
 
 /// Loads and validates. A calibration path is resolved against the file's directory and must exist.

@@ -64,22 +64,22 @@ class YamlBinder {
   YamlBinder(const YAML::Node& node, std::string file, std::string prefix = "");
   /// Emitting documented YAML to `out` with keys at column `indent`. With `defaults` (from a
   /// recording pass), each doc comment ends with "(default: X)".
-  explicit YamlBinder(std::ostream& out, int indent = 0, const Defaults* defaults = nullptr,
-                      std::string prefix = "");
+  explicit YamlBinder(std::ostream& out, int indent = 0, const Defaults* defaults = nullptr, std::string prefix = "");
   /// Recording: stores the text of every field's value in `record` (list items under "key[].").
   explicit YamlBinder(Defaults* record, std::string prefix = "");
 
   bool reading() const { return mode_ == Mode::kRead; }
 
-  template <typename T>
-  YamlBinder& field(const std::string& key, T& value, const std::string& doc) {
+  template <typename T> YamlBinder& field(const std::string& key, T& value, const std::string& doc) {
     switch (mode_) {
       case Mode::kRead: {
         const YAML::Node child = lookup(key);
         if (child) decodeYaml(child, where(key, child), value);
         break;
       }
-      case Mode::kRecord: (*record_)[prefix_ + key] = defaultText(value); break;
+      case Mode::kRecord:
+        (*record_)[prefix_ + key] = defaultText(value);
+        break;
       case Mode::kEmit:
         emitKey(key, withDefault(key, doc), " " + encodeYaml(value, keyColumn() + static_cast<int>(key.size()) + 3));
         break;
@@ -89,9 +89,9 @@ class YamlBinder {
 
   /// A value spelled in YAML as one of `spellings` ({value, name}), e.g. an enum; reading any
   /// other name is an error listing the valid ones.
-  template <typename E>
-  YamlBinder& choice(const std::string& key, E& value, const std::vector<std::pair<E, std::string>>& spellings,
-                     const std::string& doc) {
+  template <typename E> YamlBinder& choice(const std::string& key, E& value,
+                                           const std::vector<std::pair<E, std::string>>& spellings,
+                                           const std::string& doc) {
     if (mode_ != Mode::kRead) {
       std::string text;
       for (const auto& [v, name] : spellings)
@@ -195,8 +195,7 @@ class YamlBinder {
  private:
   enum class Mode { kRead, kEmit, kRecord };
 
-  template <typename T>
-  static std::string defaultText(const T& value) { return encodeYaml(value, 0); }
+  template <typename T> static std::string defaultText(const T& value) { return encodeYaml(value, 0); }
   static std::string defaultText(const Eigen::Isometry3d& value);
 
   YAML::Node lookup(const std::string& key);
@@ -223,8 +222,7 @@ class YamlBinder {
 };
 
 /// Documented YAML of `value` (every field, its doc and "(default: X)" from a default T).
-template <typename T, typename BindFn>
-std::string documentedYaml(T& value, BindFn bind) {
+template <typename T, typename BindFn> std::string documentedYaml(T& value, BindFn bind) {
   YamlBinder::Defaults defaults;
   T default_value{};
   YamlBinder recorder(&defaults);

@@ -11,7 +11,7 @@
 namespace mmlio::lidar {
 
 struct BadFrameConfig {
-  bool enabled = true;            // false: never bad
+  bool enabled = true;  // false: never bad
   // true: a frame the edge count marks bad is still kept when its own map matches constrain every
   // translation direction (judged by the estimator, see estimator/degeneracy.hpp); false: the
   // paper's tau_e count alone.

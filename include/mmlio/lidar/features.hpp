@@ -30,21 +30,21 @@
 namespace mmlio::lidar {
 
 struct FeatureConfig {
-  int neighbours = 5;               // points each side for curvature / scatter
-  double edge_threshold = 1.0;      // curvature above which a point is an edge (dimensionless, see above)
-  double plane_threshold = 0.1;     // curvature below which a point is a plane
-  double continuity_jump_m = 0.3;   // gap between consecutive line points that breaks a neighbourhood
-  double min_range_m = 0.5;         // closer returns are ignored
-  int range_image_cols = 1800;      // azimuth bins of the range image used when rings are missing
+  int neighbours = 5;              // points each side for curvature / scatter
+  double edge_threshold = 1.0;     // curvature above which a point is an edge (dimensionless, see above)
+  double plane_threshold = 0.1;    // curvature below which a point is a plane
+  double continuity_jump_m = 0.3;  // gap between consecutive line points that breaks a neighbourhood
+  double min_range_m = 0.5;        // closer returns are ignored
+  int range_image_cols = 1800;     // azimuth bins of the range image used when rings are missing
   // Beyond the shared config:
   double min_neighbour_spacing_m = 0.05;  // neighbours are every n-th point so they are this far apart (noise)
-  int max_stride = 8;               // ... but at most every max_stride-th point
-  double edge_min_bend_deg = 30.0;  // angle between the two half-neighbourhood lines for a line edge
-  double plane_max_flatness = 0.05; // lambda_2 / lambda_1 of the neighbourhood for a plane point
-  int sectors_per_line = 6;         // each line is split into this many sectors for even spreading
-  int max_edges_per_sector = 20;    // LOAM-style cap on edges per sector
-  int max_planes_per_sector = 100;  // cap on planes per sector (the flattest are kept)
-  bool planes = true;               // false: edges only (a LiDAR whose every return is a surface point)
+  int max_stride = 8;                     // ... but at most every max_stride-th point
+  double edge_min_bend_deg = 30.0;        // angle between the two half-neighbourhood lines for a line edge
+  double plane_max_flatness = 0.05;       // lambda_2 / lambda_1 of the neighbourhood for a plane point
+  int sectors_per_line = 6;               // each line is split into this many sectors for even spreading
+  int max_edges_per_sector = 20;          // LOAM-style cap on edges per sector
+  int max_planes_per_sector = 100;        // cap on planes per sector (the flattest are kept)
+  bool planes = true;                     // false: edges only (a LiDAR whose every return is a surface point)
 };
 
 struct FeatureCloud {

@@ -30,9 +30,10 @@ struct AlignedSweep {
 class SweepAligner {
  public:
   struct Config {
-    std::string reference;             // name of the LiDAR whose sweeps define the windows
-    double max_wait_s = 0.3;           // how long (data time) to wait for other sensors' points past a window end
-    double reference_timeout_s = 0.5;  // reference silent this long -> windows from the next sensor's own frames (logged)
+    std::string reference;    // name of the LiDAR whose sweeps define the windows
+    double max_wait_s = 0.3;  // how long (data time) to wait for other sensors' points past a window end
+    double reference_timeout_s =
+        0.5;  // reference silent this long -> windows from the next sensor's own frames (logged)
   };
 
   explicit SweepAligner(Config cfg);
@@ -55,11 +56,11 @@ class SweepAligner {
     Point p;
   };
   struct SensorQueue {
-    std::vector<TimedPoint> points;                // sorted by t_ns; a window's are its front (from head)
-    std::size_t head = 0;                          // points before it were cut; dropped now and then
-    std::deque<std::pair<Stamp, Stamp>> frames;    // [start, end) of its own frames not yet windowed
-    Stamp latest_ns = 0;                           // newest point time received
-    std::size_t order = 0;                         // first-seen rank
+    std::vector<TimedPoint> points;              // sorted by t_ns; a window's are its front (from head)
+    std::size_t head = 0;                        // points before it were cut; dropped now and then
+    std::deque<std::pair<Stamp, Stamp>> frames;  // [start, end) of its own frames not yet windowed
+    Stamp latest_ns = 0;                         // newest point time received
+    std::size_t order = 0;                       // first-seen rank
   };
   struct Window {
     Stamp start_ns, end_ns;
@@ -76,10 +77,10 @@ class SweepAligner {
   std::deque<Window> windows_;
   bool have_window_ = false;
   Stamp last_window_end_ns_ = 0;
-  Stamp newest_ns_ = 0;            // newest point time over all sensors
+  Stamp newest_ns_ = 0;  // newest point time over all sensors
   bool have_data_ = false;
   Stamp first_data_ns_ = 0;
-  Stamp reference_mark_ns_ = 0;    // end of the newest reference sweep (or first data time)
+  Stamp reference_mark_ns_ = 0;  // end of the newest reference sweep (or first data time)
   bool fallback_ = false;
   bool fallback_logged_ = false;
   bool resume_logged_ = false;

@@ -19,17 +19,17 @@
 namespace mmlio::map {
 
 struct RangeImageConfig {
-  double resolution_deg = 0.5;  // pixel size in azimuth and elevation
-  int window_cols = 1;          // half-window in azimuth, pixels
-  int window_rows = 4;          // half-window in elevation, pixels (spans a VLP-16's 2 deg ring gap)
-  double margin_m = 0.1;        // free: every ray nearby went at least this much farther ...
-  double margin_fraction = 0.02;  // ... plus this fraction of the point's range (range noise, pose error)
-  double hit_margin_m = 0.05;   // seen on: a return this close to the point's range ...
+  double resolution_deg = 0.5;        // pixel size in azimuth and elevation
+  int window_cols = 1;                // half-window in azimuth, pixels
+  int window_rows = 4;                // half-window in elevation, pixels (spans a VLP-16's 2 deg ring gap)
+  double margin_m = 0.1;              // free: every ray nearby went at least this much farther ...
+  double margin_fraction = 0.02;      // ... plus this fraction of the point's range (range noise, pose error)
+  double hit_margin_m = 0.05;         // seen on: a return this close to the point's range ...
   double hit_margin_fraction = 0.01;  // ... plus this fraction (tighter than free: a point 10-20 cm in
                                       // front of a wall is neither, not "seen on" by every view of the wall)
-  double min_range_m = 0.5;     // nearer points are never judged (self returns, blind zone) ...
-  double max_range_m = 20.0;    // ... nor farther ones (the margin there exceeds a person's depth;
-                                // never beyond kMaxJudgedRangeM)
+  double min_range_m = 0.5;           // nearer points are never judged (self returns, blind zone) ...
+  double max_range_m = 20.0;          // ... nor farther ones (the margin there exceeds a person's depth;
+                                      // never beyond kMaxJudgedRangeM)
 };
 
 /// Farthest point any image judges: window summaries hold ranges up to 327.67 m (15 bits of cm),

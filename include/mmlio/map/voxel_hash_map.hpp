@@ -86,7 +86,7 @@ class VoxelHashMap {
   }
   /// The voxel at k: its index, and whether it was created.
   std::pair<std::uint32_t, bool> findOrAdd(const Key& k);
-  void rebuildIndex();  // after voxels were emptied: drops them from the index
+  void rebuildIndex();         // after voxels were emptied: drops them from the index
   void compactBrickByBrick();  // rewrites the arena in brick order, dropping unowned slots
   const Eigen::Vector3d* pointsOf(const Voxel& v) const { return points_.data() + v.begin; }
   Eigen::Vector3d* pointsOf(const Voxel& v) { return points_.data() + v.begin; }

@@ -20,20 +20,20 @@ struct BagCalibrationOptions {
   double max_rest_gyro_rad_s = 0.05;  // stationary: every 50 ms gyro mean within this of the window's
   double max_rest_acc_m_s2 = 0.3;     // ... and every 50 ms accelerometer mean within this
   bool estimate_time_offset = true;
-  double temporal_window_s = 120.0;   // bag time after the start searched for turns (only turning
-                                      // sweeps are kept: memory follows the turns, not the window)
-  double temporal_voxel_m = 0.05;     // kept sweeps are voxel-filtered (each voxel keeps a point's time)
+  double temporal_window_s = 120.0;  // bag time after the start searched for turns (only turning
+                                     // sweeps are kept: memory follows the turns, not the window)
+  double temporal_voxel_m = 0.05;    // kept sweeps are voxel-filtered (each voxel keeps a point's time)
   calib::SpatialCalibrationConfig spatial;
   calib::TimeOffsetConfig temporal;
 };
 
 struct BagCalibrationResult {
-  io::Calibration calibration;        // both LiDARs, ready for io::applyCalibration / writeCalibration
-  std::string spinning, solid;        // their names
+  io::Calibration calibration;  // both LiDARs, ready for io::applyCalibration / writeCalibration
+  std::string spinning, solid;  // their names
   calib::SpatialCalibrationResult spatial;
-  calib::TimeOffsetResult temporal;   // temporal.ok == false: the config's clock offset was kept
-  Json report;                        // what was measured, for report.json
-  YAML::Node extra;                   // fitness, overlap, points, offset sigma: for writeCalibration
+  calib::TimeOffsetResult temporal;  // temporal.ok == false: the config's clock offset was kept
+  Json report;                       // what was measured, for report.json
+  YAML::Node extra;                  // fitness, overlap, points, offset sigma: for writeCalibration
 };
 
 /// Throws mmlio::Error with a one-line reason when it cannot calibrate: the config lacks a spinning

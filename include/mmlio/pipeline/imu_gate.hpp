@@ -18,8 +18,8 @@ class ImuGate {
   struct Config {
     double max_acc_m_s2 = 50.0 * 9.80665;  // 50 g: beyond every MEMS IMU's range
     double max_gyro_rad_s = 50.0;
-    double max_jump_s = 1.0;               // a later stamp further ahead than this is rejected ...
-    int jump_confirmations = 20;           // ... unless this many samples in a row agree (a real gap)
+    double max_jump_s = 1.0;      // a later stamp further ahead than this is rejected ...
+    int jump_confirmations = 20;  // ... unless this many samples in a row agree (a real gap)
   };
   struct Counts {
     std::size_t non_finite = 0, out_of_range = 0, out_of_order = 0, jumped = 0;

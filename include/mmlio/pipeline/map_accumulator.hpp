@@ -30,7 +30,7 @@ class MapAccumulator {
   double leaf_m_;
   std::vector<Cell> cells_;  // in the order their voxels were first hit
   FlatKeyIndex index_;       // voxel key -> cell
-  std::vector<Point> raw_;  // leaf 0
+  std::vector<Point> raw_;   // leaf 0
 };
 
 /// Points in a body frame at a pose, for mergeIntoVoxels.

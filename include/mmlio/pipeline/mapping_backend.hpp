@@ -24,7 +24,7 @@ class MappingBackend {
 
   /// What the ghost removal did so far.
   struct GhostRemoval {
-    std::size_t judged_points = 0;       // map points at least one keyframe view could judge
+    std::size_t judged_points = 0;  // map points at least one keyframe view could judge
     std::size_t removed_points = 0;
   };
 
@@ -76,7 +76,7 @@ class MappingBackend {
   std::vector<Submap> submaps_;
   std::map<std::string, MapAccumulator> open_;
   std::map<std::string, MapAccumulator> emptied_;  // closed accumulators, kept for their storage
-  std::map<std::string, FlatKeySet> covered_;  // world voxels held, per LiDAR key
+  std::map<std::string, FlatKeySet> covered_;      // world voxels held, per LiDAR key
   void closeSubmap();
   MapAccumulator& openAccumulator(const std::string& key);  // the newest keyframe's, for this LiDAR key
   std::vector<Point> mergedMap(const std::string* only_lidar) const;

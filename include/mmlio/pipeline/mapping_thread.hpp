@@ -38,8 +38,7 @@ class MappingThread {
   std::size_t capacity() const { return capacity_; }
   /// Runs f(backend) between two of the back end's sweeps, for live queries from another thread
   /// (corrected path, map); the back end waits meanwhile.
-  template <class F>
-  auto read(F&& f) const {
+  template <class F> auto read(F&& f) const {
     std::lock_guard<std::mutex> lock(backend_mutex_);
     return f(static_cast<const MappingBackend&>(backend_));
   }
@@ -55,8 +54,8 @@ class MappingThread {
   std::size_t keyframes_ = 0;  // seen by the worker
   std::deque<estimator::SweepResult> queue_;
   std::size_t queue_high_water_ = 0;
-  mutable std::mutex mutex_;           // the queue
-  mutable std::mutex backend_mutex_;   // the back end and its timing
+  mutable std::mutex mutex_;          // the queue
+  mutable std::mutex backend_mutex_;  // the back end and its timing
   std::condition_variable not_empty_, not_full_;
   bool closing_ = false, finished_ = false;
   std::exception_ptr error_;

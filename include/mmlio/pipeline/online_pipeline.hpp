@@ -73,8 +73,8 @@ class OnlinePipeline {
   std::map<std::string, StampJumpGuard> scan_jumps_;  // per LiDAR
   bool timeBaseJumped(Stamp imu_jump_ns) const;
   StampJumpGuard& scanJumpGuard(const std::string& sensor);
-  Stamp shift_ns_ = 0;                 // subtracted from every incoming stamp
-  Stamp imu_period_ns_ = 0;            // latest spacing of accepted IMU samples
+  Stamp shift_ns_ = 0;       // subtracted from every incoming stamp
+  Stamp imu_period_ns_ = 0;  // latest spacing of accepted IMU samples
   std::vector<TimeBaseJump> time_jumps_;
   std::deque<lidar::AlignedSweep> pending_;
   SweepCallback on_sweep_;

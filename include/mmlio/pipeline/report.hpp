@@ -12,8 +12,8 @@
 namespace mmlio::pipeline {
 
 /// Draws the map slice |z - mean trajectory z| < slice_half_height_m with the trajectory on top.
-void plotMapTopView(const std::string& png_path, const std::vector<Point>& map_world,
-                    const Trajectory& trajectory, double slice_half_height_m = 0.8);
+void plotMapTopView(const std::string& png_path, const std::vector<Point>& map_world, const Trajectory& trajectory,
+                    double slice_half_height_m = 0.8);
 
 /// Writes dir/report.json, dir/report.md, dir/map_top.png and (with gt_path) dir/evaluation.png;
 /// fills report.figures and (with gt_path) report.evaluation.

@@ -21,23 +21,23 @@ namespace mmlio::pipeline {
 
 struct RunReport {
   struct Input {
-    std::string source;                 // bag path, or "live" (the node)
-    std::string config;                 // rig YAML path ("" = built-in defaults)
+    std::string source;  // bag path, or "live" (the node)
+    std::string config;  // rig YAML path ("" = built-in defaults)
     std::string mode;
-    double duration_s = 0.0;            // bag duration, or the time the node has run (sensor clock)
+    double duration_s = 0.0;  // bag duration, or the time the node has run (sensor clock)
     std::size_t imu_messages = 0;
     double imu_acc_scale = 1.0;
-    std::size_t skipped_messages = 0;   // failed to deserialise
+    std::size_t skipped_messages = 0;  // failed to deserialise
     ImuGate::Counts imu_dropped;
     std::size_t scans_out_of_order = 0, scans_stamp_jumps = 0;
-    Stamp scans_dropped_from_ns = 0, scans_dropped_to_ns = 0;  // stream position of the first / last drop
+    Stamp scans_dropped_from_ns = 0, scans_dropped_to_ns = 0;    // stream position of the first / last drop
     std::size_t queue_dropped_imu = 0, queue_dropped_scans = 0;  // live: processing queue full
     bool truncated = false;
-    std::size_t damaged_chunks = 0;     // damaged stretches of the bag skipped
+    std::size_t damaged_chunks = 0;  // damaged stretches of the bag skipped
     struct TimeBaseJump {
       double at_s = 0.0, shift_s = 0.0;  // input stamp where it happened; stamps shifted back by
     };
-    std::vector<TimeBaseJump> time_base_jumps;  // the whole stream's time base jumped (see OnlinePipeline)
+    std::vector<TimeBaseJump> time_base_jumps;       // the whole stream's time base jumped (see OnlinePipeline)
     std::map<std::string, io::DecodeStats> decoded;  // per LiDAR
   };
   struct Sweeps {
@@ -56,9 +56,9 @@ struct RunReport {
   };
   // High-water marks of what the run held: the queues are bounded, so the resident memory is too.
   struct Memory {
-    std::size_t sweeps_waiting_for_imu_max = 0;  // at most ~2 s of sweeps (OnlinePipeline)
+    std::size_t sweeps_waiting_for_imu_max = 0;                     // at most ~2 s of sweeps (OnlinePipeline)
     std::size_t mapping_queue_max = 0, mapping_queue_capacity = 0;  // sweeps queued for the back end
-    double peak_rss_mb = 0.0;  // the process's resident memory, MB
+    double peak_rss_mb = 0.0;                                       // the process's resident memory, MB
   };
   struct Outputs {
     std::string trajectory, map, dynamic_map;

@@ -17,35 +17,35 @@ namespace mmlio::pipeline {
 
 struct RunOptions {
   std::string bag_path;
-  std::string out_dir;            // empty: write nothing (bench)
-  io::RigConfig config;           // calibration already applied
-  std::string mode;               // empty: config.mode
-  bool progress = true;           // progress bar on stderr
-  std::string gt_path;            // optional TUM ground truth: evaluation in the report
-  double max_duration_s = 0.0;    // > 0: stop after this much bag time
-  int replays = 1;                // > 1: the bag is played this many times back to back, shifted in
-                                  // time, as ONE sequence (long-run memory and drift checks)
+  std::string out_dir;                      // empty: write nothing (bench)
+  io::RigConfig config;                     // calibration already applied
+  std::string mode;                         // empty: config.mode
+  bool progress = true;                     // progress bar on stderr
+  std::string gt_path;                      // optional TUM ground truth: evaluation in the report
+  double max_duration_s = 0.0;              // > 0: stop after this much bag time
+  int replays = 1;                          // > 1: the bag is played this many times back to back, shifted in
+                                            // time, as ONE sequence (long-run memory and drift checks)
   const std::atomic<bool>* stop = nullptr;  // set (e.g. by a signal handler): stop reading, write
                                             // what was computed, status "interrupted"
-  double max_degraded_fraction = 0.25; // more degraded sweeps than this, or a trajectory covering
-                                       // less than 1 - this of the stream after initialisation:
-                                       // RunResult::untrusted says why
-  System::TimingObserver on_sweep;     // every tracked sweep's stamp and stage times, on the reading
-                                       // thread (bench records its time-and-memory curve)
-  double max_drift_sigma_m = 0.3;      // ... or, somewhere, the position's uncertainty along what the
-                                       // LiDARs had not observed for a while above this (degeneracy.max_drift_sigma_m)
+  double max_degraded_fraction = 0.25;      // more degraded sweeps than this, or a trajectory covering
+                                            // less than 1 - this of the stream after initialisation:
+                                            // RunResult::untrusted says why
+  System::TimingObserver on_sweep;          // every tracked sweep's stamp and stage times, on the reading
+                                            // thread (bench records its time-and-memory curve)
+  double max_drift_sigma_m = 0.3;           // ... or, somewhere, the position's uncertainty along what the
+                                   // LiDARs had not observed for a while above this (degeneracy.max_drift_sigma_m)
 };
 
 struct RunResult {
-  Trajectory trajectory;          // IMU pose at the end of every tracked sweep
-  StageStats timing;              // the sweep loop (odometry and hand-off), per sweep
-  StageStats backend_timing;      // the mapping back end, per sweep, on its own thread
+  Trajectory trajectory;      // IMU pose at the end of every tracked sweep
+  StageStats timing;          // the sweep loop (odometry and hand-off), per sweep
+  StageStats backend_timing;  // the mapping back end, per sweep, on its own thread
   RunReport report;
   std::size_t map_points = 0;
-  bool complete = true;           // false: the bag ended in an error after `trajectory`
-  bool interrupted = false;       // options.stop was set: the outputs hold the run so far
+  bool complete = true;      // false: the bag ended in an error after `trajectory`
+  bool interrupted = false;  // options.stop was set: the outputs hold the run so far
   std::string error;
-  std::string untrusted;          // non-empty: why the outputs should not be trusted (also in the report)
+  std::string untrusted;  // non-empty: why the outputs should not be trusted (also in the report)
 };
 
 /// Runs the whole pipeline. Throws mmlio::Error for unusable input (no bag, no topic, ...);

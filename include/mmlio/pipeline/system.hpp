@@ -58,9 +58,9 @@ class System {
   std::vector<Point> map() const;
   /// The run so far; the feeder adds what it knows of its input (source, decoding, drops).
   RunReport report() const;
-  /// trajectory.tum (corrected; + KITTI if configured), trajectory_odometry.tum, map.pcd, per-LiDAR and dynamic maps, report.json,
-  /// report.md and figures into dir (created); returns the report as written. The files are
-  /// replaced atomically, so a live save never leaves a half-written one.
+  /// trajectory.tum (corrected; + KITTI if configured), trajectory_odometry.tum, map.pcd, per-LiDAR and dynamic maps,
+  /// report.json, report.md and figures into dir (created); returns the report as written. The files are replaced
+  /// atomically, so a live save never leaves a half-written one.
   RunReport writeOutputs(const std::string& dir, RunReport report, const std::string& gt_path = "") const;
 
   const estimator::Odometry& odometry() const { return online_.odometry(); }

@@ -11,17 +11,17 @@ namespace mmlio::sim {
 
 struct Beam {
   Eigen::Vector3f dir = Eigen::Vector3f::UnitX();  // unit vector, sensor frame
-  float time_s = 0.f;                               // offset from the sweep/frame start
-  std::uint16_t ring = 0;                           // spinning ring (0 = lowest) or Livox line
+  float time_s = 0.f;                              // offset from the sweep/frame start
+  std::uint16_t ring = 0;                          // spinning ring (0 = lowest) or Livox line
 };
 
 /// VLP-16-like spinning LiDAR.
 struct VelodyneConfig {
-  double rate_hz = 10.0;                // rotations per second
-  double azimuth_step_deg = 0.2;        // between firing sequences
-  double laser_interval_s = 2.304e-6;   // between two lasers of a firing sequence
-  double start_azimuth_deg = 180.0;     // where a sweep starts (x axis = 0, counter-clockwise)
-  double range_noise_m = 0.015;         // 1 sigma
+  double rate_hz = 10.0;               // rotations per second
+  double azimuth_step_deg = 0.2;       // between firing sequences
+  double laser_interval_s = 2.304e-6;  // between two lasers of a firing sequence
+  double start_azimuth_deg = 180.0;    // where a sweep starts (x axis = 0, counter-clockwise)
+  double range_noise_m = 0.015;        // 1 sigma
   double max_range_m = 100.0;
   double min_range_m = 0.4;
 };
@@ -46,7 +46,7 @@ enum class SolidStatePattern { kLissajous, kRosette };
 struct LivoxConfig {
   SolidStatePattern pattern = SolidStatePattern::kLissajous;
   double frame_rate_hz = 10.0;
-  int points_per_frame = 24000;    // 6 lines fire together: points_per_frame / 6 firings
+  int points_per_frame = 24000;  // 6 lines fire together: points_per_frame / 6 firings
   int num_lines = 6;
   double fov_horizontal_deg = 81.7;
   double fov_vertical_deg = 25.1;
@@ -54,7 +54,7 @@ struct LivoxConfig {
   double vertical_hz = 1.2833;     // triangular vertical drift cycles per second
   double rosette_fast_hz = 73.13;  // rosette: the two prism rotation rates, opposite senses
   double rosette_slow_hz = 41.71;
-  double range_noise_m = 0.02;     // 1 sigma
+  double range_noise_m = 0.02;  // 1 sigma
   double max_range_m = 90.0;
   double min_range_m = 0.5;
 };

@@ -15,11 +15,11 @@ inline constexpr double kOnSurfaceM = 0.1;
 
 struct MapScore {
   std::size_t points = 0;
-  double median_m = 0.0, p90_m = 0.0;      // distance to the nearest static surface
-  double off_surface_fraction = 0.0;       // share of points farther than kOnSurfaceM
-  std::size_t static_voxels = 0;           // kOnSurfaceM voxels holding an on-surface point
-  std::vector<Eigen::Vector3d> on_surface; // the points within kOnSurfaceM of a surface
-  std::vector<std::size_t> off_surface;    // indices of the others
+  double median_m = 0.0, p90_m = 0.0;       // distance to the nearest static surface
+  double off_surface_fraction = 0.0;        // share of points farther than kOnSurfaceM
+  std::size_t static_voxels = 0;            // kOnSurfaceM voxels holding an on-surface point
+  std::vector<Eigen::Vector3d> on_surface;  // the points within kOnSurfaceM of a surface
+  std::vector<std::size_t> off_surface;     // indices of the others
 };
 
 MapScore scoreMap(const Scene& scene, const std::vector<Eigen::Vector3d>& map);

@@ -21,7 +21,7 @@ struct Person {
   std::vector<Eigen::Vector2d> path;  // polyline the person paces along, m (world x, y)
   std::vector<double> arc_m;          // arc length at each path vertex
   double speed_m_s = 1.0;
-  double phase_m = 0.0;               // where on the back-and-forth cycle the person is at t = 0
+  double phase_m = 0.0;  // where on the back-and-forth cycle the person is at t = 0
   bool crosser = false;
 };
 

@@ -19,7 +19,9 @@ inline std::uint64_t hashKey(std::uint64_t a, std::uint64_t b, std::uint64_t c, 
 }
 
 /// Uniform in (0, 1) from a 64-bit hash.
-inline double unitFromHash(std::uint64_t h) { return (static_cast<double>(h >> 11) + 0.5) * (1.0 / 9007199254740992.0); }
+inline double unitFromHash(std::uint64_t h) {
+  return (static_cast<double>(h >> 11) + 0.5) * (1.0 / 9007199254740992.0);
+}
 
 /// Standard normal sample for a key (Box-Muller on two derived hashes).
 inline double normalFromKey(std::uint64_t key) {

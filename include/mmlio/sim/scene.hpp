@@ -29,8 +29,8 @@ struct RayHit {
 };
 
 struct SceneConfig {
-  double cell_size_m = 1.0;    // side of the (x, y) grid cells
-  int large_box_cells = 32;    // boxes covering more cells are tested once per ray instead
+  double cell_size_m = 1.0;  // side of the (x, y) grid cells
+  int large_box_cells = 32;  // boxes covering more cells are tested once per ray instead
 };
 
 class Scene {

@@ -36,26 +36,26 @@ constexpr Stamp kVelodynePhaseNs = 37000000LL;        // Velodyne sweeps start 3
 /// IMU noise model (continuous-time densities), Kalibr convention.
 struct ImuNoiseConfig {
   double rate_hz = 200.0;
-  double acc_noise_density = 0.02;      // m/s^2/sqrt(Hz)
-  double gyro_noise_density = 0.002;    // rad/s/sqrt(Hz)
-  double acc_random_walk = 5e-4;        // m/s^3/sqrt(Hz)
-  double gyro_random_walk = 5e-5;       // rad/s^2/sqrt(Hz)
-  ImuBias initial_bias;                 // set by the simulator (see the header comment)
+  double acc_noise_density = 0.02;    // m/s^2/sqrt(Hz)
+  double gyro_noise_density = 0.002;  // rad/s/sqrt(Hz)
+  double acc_random_walk = 5e-4;      // m/s^3/sqrt(Hz)
+  double gyro_random_walk = 5e-5;     // rad/s^2/sqrt(Hz)
+  ImuBias initial_bias;               // set by the simulator (see the header comment)
 };
 
 struct SimOptions {
-  std::string scenario;                 // one of scenarioNames()
-  double duration_s = 0;                // 0: the scenario's full walk (office ~40 s, corridor ~110 s, hall ~150 s)
-  std::uint64_t seed = 1;               // noise seed (the scene and the walk do not depend on it)
-  double velodyne_time_offset_s = 0;    // Velodyne stamps are written as t_true - offset
+  std::string scenario;               // one of scenarioNames()
+  double duration_s = 0;              // 0: the scenario's full walk (office ~40 s, corridor ~110 s, hall ~150 s)
+  std::uint64_t seed = 1;             // noise seed (the scene and the walk do not depend on it)
+  double velodyne_time_offset_s = 0;  // Velodyne stamps are written as t_true - offset
   // Variations for benchmarks that must not depend on one set of conditions:
-  ImuNoiseConfig imu;                   // densities; initial_bias is replaced by the simulator
-  double acc_bias_m_s2 = -1;            // >= 0: initial accelerometer bias of this size per axis, signs from the seed
+  ImuNoiseConfig imu;         // densities; initial_bias is replaced by the simulator
+  double acc_bias_m_s2 = -1;  // >= 0: initial accelerometer bias of this size per axis, signs from the seed
   SolidStatePattern livox_pattern = SolidStatePattern::kLissajous;
-  bool random_mount = false;            // both extrinsics and the Velodyne sweep phase drawn from the seed
+  bool random_mount = false;              // both extrinsics and the Velodyne sweep phase drawn from the seed
   bool livox_no_returns_as_zero = false;  // beams without a return become (0,0,0) points, as the Livox driver does
-  int people = 0;                       // people walking through the scene (see people.hpp), paths from the seed
-  bool handheld = false;                // the route carried by hand (carriedByHand in scenarios.hpp)
+  int people = 0;                         // people walking through the scene (see people.hpp), paths from the seed
+  bool handheld = false;                  // the route carried by hand (carriedByHand in scenarios.hpp)
 };
 
 /// A scenario's full walk with every other option at its default.
