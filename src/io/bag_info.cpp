@@ -15,6 +15,7 @@
 #include "bag_open.hpp"
 #include "cdr_messages.hpp"
 #include "imu_unit.hpp"
+#include "message_types.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
 #include "mmlio/io/cloud_decoders.hpp"
@@ -177,10 +178,10 @@ BagInfo describeBag(const std::string& path) {
         const double span_s = (v.getEndTime() - v.getBeginTime()).toSec();
         if (span_s > 0) t.rate_hz = static_cast<double>(t.messages - 1) / span_s;
       }
-      if (type == "sensor_msgs/PointCloud2" || type == kLivoxCustomMsgType || type == kLivox2CustomMsgType) {
+      if (detail::isCloudType(type) || detail::isLivoxType(type)) {
         sampleClouds(bag, {topic}, t);
       }
-      if (type == "sensor_msgs/Imu") {
+      if (detail::isImuType(type)) {
         if (info.imu_unit_guess.empty()) info.imu_unit_guess = guessImuUnit(bag, topic);
         t.frame_id = withoutSlash(imuFrameId(bag, topic));
       }

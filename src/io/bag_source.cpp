@@ -16,6 +16,7 @@
 #include "bag_open.hpp"
 #include "cdr_messages.hpp"
 #include "imu_unit.hpp"
+#include "message_types.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
 #include "mmlio/io/cloud_decoders.hpp"
@@ -25,17 +26,11 @@
 namespace mmlio::io {
 namespace {
 
-constexpr const char* kPointCloud2 = "sensor_msgs/PointCloud2";
-constexpr const char* kImu = "sensor_msgs/Imu";
-
-// Types as ROS 1 or ROS 2 spell them.
-bool isImuType(const std::string& t) { return t == kImu || detail::ros2Type(t) == detail::Ros2Type::kImu; }
-bool isCloudType(const std::string& t) {
-  return t == kPointCloud2 || detail::ros2Type(t) == detail::Ros2Type::kPointCloud2;
-}
-bool isLivoxType(const std::string& t) {
-  return t == kLivoxCustomMsgType || t == kLivox2CustomMsgType || detail::ros2Type(t) == detail::Ros2Type::kLivox;
-}
+using detail::isCloudType;
+using detail::isImuType;
+using detail::isLivoxType;
+constexpr const char* kPointCloud2 = detail::kPointCloud2Type;
+constexpr const char* kImu = detail::kImuType;
 
 Stamp toNs(const ros::Time& t) { return static_cast<Stamp>(t.toNSec()); }
 

@@ -8,17 +8,11 @@
 #include <sstream>
 #include <vector>
 
+#include "message_types.hpp"
 #include "mmlio/core/error.hpp"
 
 namespace mmlio::io {
 namespace {
-
-bool endsWith(const std::string& s, const std::string& tail) {
-  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
-}
-bool isImu(const TopicInfo& t) { return endsWith(t.type, "/Imu"); }
-bool isCloud(const TopicInfo& t) { return endsWith(t.type, "/PointCloud2"); }
-bool isLivox(const TopicInfo& t) { return t.type.find("livox") != std::string::npos && endsWith(t.type, "CustomMsg"); }
 
 bool hasField(const TopicInfo& t, const std::string& name) {
   for (const std::string& f : t.fields)
@@ -136,11 +130,12 @@ std::string starterRigConfig(const BagInfo& info) {
   std::vector<const TopicInfo*> imus;
   std::vector<Lidar> spinning, solid;
   for (const TopicInfo& t : info.topics) {
-    if (isImu(t))
+    // The types the bag reader takes, no others: a guess it would refuse helps nobody.
+    if (detail::isImuType(t.type))
       imus.push_back(&t);
-    else if (isCloud(t))
+    else if (detail::isCloudType(t.type))
       spinning.push_back(spinningLidar(t));
-    else if (isLivox(t))
+    else if (detail::isLivoxType(t.type))
       solid.push_back(solidStateLidar(t));
   }
   if (imus.empty()) throw Error(info.path + " has no sensor_msgs/Imu topic: mmlio needs an IMU");
