@@ -235,6 +235,10 @@ std::string YamlBinder::withDefault(const std::string& key, const std::string& d
 
 YAML::Node YamlBinder::lookup(const std::string& key) {
   declared_.push_back(key);
+  return child(key);
+}
+
+YAML::Node YamlBinder::child(const std::string& key) const {
   if (!node_.IsMap()) return YAML::Node(YAML::NodeType::Undefined);
   const YAML::Node& map = node_;  // const: operator[] must not insert
   for (auto it = map.begin(); it != map.end(); ++it)
@@ -246,13 +250,7 @@ void YamlBinder::throwChoice(const std::string& where, const std::string& valid,
   throw Error(where + ": must be one of " + valid + ", got '" + got + "'");
 }
 
-bool YamlBinder::has(const std::string& key) const {
-  if (mode_ != Mode::kRead || !node_.IsMap()) return false;
-  const YAML::Node& map = node_;
-  for (auto it = map.begin(); it != map.end(); ++it)
-    if (it->first.IsScalar() && it->first.Scalar() == key) return true;
-  return false;
-}
+bool YamlBinder::has(const std::string& key) const { return mode_ == Mode::kRead && child(key).IsDefined(); }
 
 std::string YamlBinder::location() const { return yamlLocation(file_, node_); }
 

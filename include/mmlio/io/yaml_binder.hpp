@@ -198,7 +198,8 @@ class YamlBinder {
   template <typename T> static std::string defaultText(const T& value) { return encodeYaml(value, 0); }
   static std::string defaultText(const Eigen::Isometry3d& value);
 
-  YAML::Node lookup(const std::string& key);
+  YAML::Node lookup(const std::string& key);       // child(key), and key counts as declared (finish())
+  YAML::Node child(const std::string& key) const;  // the node under key, Undefined if absent
   [[noreturn]] static void throwChoice(const std::string& where, const std::string& valid, const std::string& got);
   std::string where(const std::string& key, const YAML::Node& node) const;
   [[noreturn]] void throwNotA(const std::string& what, const std::string& key, const YAML::Node& node) const;
