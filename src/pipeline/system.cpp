@@ -22,6 +22,10 @@ System::System(const io::RigConfig& cfg, const std::string& mode, SweepObserver 
       online_(cfg, mode_, [this](estimator::SweepResult r) { onSweep(std::move(r)); }) {
   dynamic_.enabled = cfg.estimator.dynamic.enabled;
   dynamic_.clean_map = cfg.mapping.clean_map;
+  io::RigConfig effective = cfg_;  // as run: the mode chosen, the extrinsics already applied
+  effective.mode = mode_;
+  effective.calibration = "config";
+  effective_config_yaml_ = io::toYaml(effective);  // once: every report (the node's too) carries it
 }
 
 void System::onSweep(estimator::SweepResult r) {
@@ -103,10 +107,7 @@ RunReport System::report() const {
   r.run.mmlio_version = kVersion;
   r.run.commit = kCommit;
   r.run.calibration = cfg_.calibration;
-  io::RigConfig effective = cfg_;  // as run: the mode chosen, the extrinsics already applied
-  effective.mode = mode_;
-  effective.calibration = "config";
-  r.run.config_yaml = io::toYaml(effective);
+  r.run.config_yaml = effective_config_yaml_;
   r.input.mode = mode_;
   r.input.config = cfg_.source_path;
   r.input.imu_dropped = online_.imuGate().counts();

@@ -75,6 +75,7 @@ class System {
 
   io::RigConfig cfg_;
   std::string mode_;
+  std::string effective_config_yaml_;  // report.json -> run.config_yaml, config_used.yaml
   SweepObserver observer_;
   TimingObserver timing_observer_;
   MappingThread mapping_;
