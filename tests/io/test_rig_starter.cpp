@@ -5,9 +5,9 @@
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_msgs/TFMessage.h>
 
-#include <cstring>
 #include <filesystem>
 
+#include "cloud_builder.hpp"
 #include "error_of.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/io/bag_info.hpp"
@@ -115,25 +115,11 @@ TEST(StarterRigConfig, ExtrinsicsComeFromTheBagsTfStaticThroughTheFrameTree) {
       imu.header.frame_id = "/imu_link";
       imu.linear_acceleration.z = 9.81;
       bag.write("/imu", t, imu);
-      sensor_msgs::PointCloud2 cloud;
-      cloud.header.stamp = t;
+      sensor_msgs::PointCloud2 cloud = makeCloud(
+          {{"x", PF::FLOAT32}, {"y", PF::FLOAT32}, {"z", PF::FLOAT32}, {"ring", PF::UINT16}, {"time", PF::FLOAT32}},
+          static_cast<Stamp>(t.toNSec()), 1);
       cloud.header.frame_id = "velodyne";
-      for (const auto& [name, offset, type] :
-           {std::tuple<const char*, int, int>{"x", 0, 7}, {"y", 4, 7}, {"z", 8, 7}, {"ring", 12, 4}, {"time", 16, 7}}) {
-        sensor_msgs::PointField f;
-        f.name = name;
-        f.offset = offset;
-        f.datatype = static_cast<std::uint8_t>(type);
-        f.count = 1;
-        cloud.fields.push_back(f);
-      }
-      cloud.point_step = 20;
-      cloud.width = 1;
-      cloud.height = 1;
-      cloud.row_step = 20;
-      cloud.data.assign(20, 0);
-      const float x = 5.0f;
-      std::memcpy(cloud.data.data(), &x, 4);
+      putXyz(cloud, 0, 5.0f, 0.0f, 0.0f);
       bag.write("/velodyne_points", t, cloud);
     }
   }
