@@ -157,7 +157,10 @@ void runEvaluate(const EvaluateArgs& args) {
   const Trajectory gt = readNonEmptyTum(args.gt_path, "ground-truth");
   const Trajectory est = readNonEmptyTum(args.est_path, "estimated");
   const eval::EvalResult result = eval::evaluate(gt, est, options);
-  if (!args.plot_path.empty()) eval::plotEvaluation(result, args.plot_path);
+  if (!args.plot_path.empty()) {
+    const bool html = args.plot_path.size() >= 5 && args.plot_path.compare(args.plot_path.size() - 5, 5, ".html") == 0;
+    io::writeFileAtomically(args.plot_path, [&](std::ostream& os) { os << eval::evaluationFigure(result, html); });
+  }
 
   ReferenceMap reference;
   if (!args.reference_map_path.empty()) {
@@ -218,7 +221,9 @@ void registerEvaluateCommand(CLI::App& app) {
       "Compare an estimated trajectory with ground truth (TUM files): ATE, RPE per 10 m, end-to-end, coverage");
   cmd->add_option("--gt", args->gt_path, "Ground-truth trajectory, TUM format")->required();
   cmd->add_option("--est", args->est_path, "Estimated trajectory, TUM format")->required();
-  cmd->add_option("--plot", args->plot_path, "Write the evaluation figure (top view + error over time) to this PNG");
+  cmd->add_option(
+      "--plot", args->plot_path,
+      "Write the evaluation figures (top view, error over time) to this SVG, or an HTML page if it ends in .html");
   cmd->add_flag("--json", args->json, "Print exactly one line of JSON instead of the table");
   cmd->add_option("--max-gap", args->options.max_gap_s,
                   "Max distance from an estimate stamp to the nearest GT sample, s")

@@ -22,5 +22,6 @@ echo "== HVI odometry and mapping =="
 "$MMLIO" run "$OUT/office.bag" --config "$OUT/rig.yaml" --calib "$OUT/calib.yaml" \
   --gt "$OUT/office_gt.tum" --out "$OUT/run"
 echo "== accuracy against ground truth =="
-"$MMLIO" evaluate --gt "$OUT/office_gt.tum" --est "$OUT/run/trajectory.tum" --plot "$OUT/run/evaluation.png"
-echo "outputs: $OUT/rig.yaml, $OUT/calib.yaml, $OUT/run/{trajectory.tum,map.pcd,report.json,report.md,config_used.yaml,map_top.png,evaluation.png}"
+"$MMLIO" evaluate --gt "$OUT/office_gt.tum" --est "$OUT/run/trajectory.tum" --plot "$OUT/run/evaluation.svg"
+echo "outputs: $OUT/rig.yaml, $OUT/calib.yaml, $OUT/run/{trajectory.tum,map.pcd,report.html,report.json,report.md,config_used.yaml,evaluation.svg}"
+echo "open $OUT/run/report.html in a browser: the map in 3D, the plots, every figure of the run"

@@ -6,7 +6,7 @@ set -euo pipefail
 PACKAGES=(
   build-essential cmake pkg-config
   libeigen3-dev libceres-dev libtbb-dev libnanoflann-dev
-  libyaml-cpp-dev libcli11-dev libgtest-dev libbenchmark-dev libpng-dev nlohmann-json3-dev libbz2-dev
+  libyaml-cpp-dev libcli11-dev libgtest-dev libbenchmark-dev nlohmann-json3-dev libbz2-dev
   zlib1g-dev libsqlite3-dev libzstd-dev liblz4-dev libfastcdr-dev
   librosbag-storage-dev pluginlib-dev libroscpp-dev libsensor-msgs-dev libstd-msgs-dev
   libgeometry-msgs-dev libnav-msgs-dev libtf2-ros-dev libtf2-msgs-dev libstd-srvs-dev
@@ -14,6 +14,7 @@ PACKAGES=(
   python3
   parallel bc
   clang-format
+  libjs-three chromium
 )
 
 missing=()

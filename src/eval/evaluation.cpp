@@ -83,6 +83,7 @@ EvalResult evaluate(const Trajectory& gt, const Trajectory& est, const EvalOptio
   std::vector<Eigen::Isometry3d> gt_poses(pairs.size()), est_poses(pairs.size());
   result.est_xyz_aligned.resize(pairs.size());
   result.errors_m.resize(pairs.size());
+  result.gt_start_s = toSec(gt_span.first);
   result.times_s.resize(pairs.size());
   for (size_t i = 0; i < pairs.size(); ++i) {
     gt_poses[i] = pairs[i].T_world_gt;

@@ -1,38 +1,17 @@
 #include "mmlio/eval/plot_evaluation.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
-#include "mmlio/eval/plot2d.hpp"
+#include "mmlio/eval/svg_plot.hpp"
 
 namespace mmlio::eval {
 namespace {
 
-constexpr int kWidthPx = 1000;
-constexpr int kTopViewHeightPx = 820;
-constexpr int kErrorHeightPx = 360;
-
-std::vector<Eigen::Vector2d> topView(const std::vector<Eigen::Vector3d>& xyz) {
-  std::vector<Eigen::Vector2d> xy;
-  xy.reserve(xyz.size());
-  for (const Eigen::Vector3d& p : xyz) xy.emplace_back(p.x(), p.y());
-  return xy;
-}
-
-Plot2D topViewPlot(const std::vector<Eigen::Vector3d>& gt_xyz, const std::vector<Eigen::Vector3d>& est_xyz,
-                   const std::string& title) {
-  Plot2D::Config config;
-  config.title = title;
-  config.x_label = "x [m]";
-  config.y_label = "y [m]";
-  config.equal_aspect = true;
-  Plot2D plot(config);
-  plot.addLine(topView(gt_xyz), colors::kGroundTruth, 3.0, "ground truth");
-  plot.addLine(topView(est_xyz), colors::kEstimate, 2.0, "estimate");
-  if (!gt_xyz.empty())
-    plot.addMarker(Eigen::Vector2d(gt_xyz.front().x(), gt_xyz.front().y()), colors::kGreen, 5.0, "start");
-  return plot;
-}
+constexpr int kWidthPx = 900;
+constexpr int kTopViewHeightPx = 640;
+constexpr int kErrorHeightPx = 320;
 
 std::string format(const char* pattern, double value) {
   if (!std::isfinite(value)) return "n/a";
@@ -41,50 +20,69 @@ std::string format(const char* pattern, double value) {
   return text;
 }
 
+std::vector<Eigen::Vector2d> topView(const std::vector<Eigen::Vector3d>& xyz) {
+  std::vector<Eigen::Vector2d> xy;
+  xy.reserve(xyz.size());
+  for (const Eigen::Vector3d& p : xyz) xy.emplace_back(p.x(), p.y());
+  return xy;
+}
+
 }  // namespace
 
-void plotTrajectories(const std::string& png_path, const std::vector<Eigen::Vector3d>& gt_xyz,
-                      const std::vector<Eigen::Vector3d>& est_xyz, const std::string& title) {
-  Canvas canvas(kWidthPx, kTopViewHeightPx);
-  topViewPlot(gt_xyz, est_xyz, title).draw(canvas, 0, 0, kWidthPx, kTopViewHeightPx);
-  canvas.savePng(png_path);
+std::string topViewSvg(const EvalResult& r) {
+  SvgPlot::Config c;
+  c.id = "eval-top";
+  c.title = "Top view: ATE RMSE " + format("%.2f", 100.0 * r.ate_rmse_m) + " cm, RPE " + format("%.2f", r.rpe_10m_pct) +
+            " % / " + format("%.4f", r.rpe_10m_deg_per_m) + " deg/m";
+  c.x_label = "x [m]";
+  c.y_label = "y [m]";
+  c.width_px = kWidthPx, c.height_px = kTopViewHeightPx;
+  c.equal_aspect = true;
+  SvgPlot plot(c);
+  plot.line(topView(r.gt_xyz), colors::kGroundTruth, 3.0, "ground truth");
+  plot.line(topView(r.est_xyz_aligned), colors::kEstimate, 1.5, "estimate");
+  if (!r.gt_xyz.empty()) plot.marker(r.gt_xyz.front().head<2>(), colors::kStart, "start");
+  return plot.render();
 }
 
-Canvas renderEvaluation(const EvalResult& r) {
-  Canvas canvas(kWidthPx, kTopViewHeightPx + kErrorHeightPx);
-  const std::string top_title = "Top view  -  ATE RMSE " + format("%.3f", r.ate_rmse_m) + " m,  RPE " +
-                                format("%.2f", r.rpe_10m_pct) + " % " + format("%.4f", r.rpe_10m_deg_per_m) + " deg/m";
-  topViewPlot(r.gt_xyz, r.est_xyz_aligned, top_title).draw(canvas, 0, 0, kWidthPx, kTopViewHeightPx);
-
-  Plot2D::Config config;
-  config.title = "Position error after alignment  -  coverage " + format("%.1f", 100.0 * r.coverage) +
-                 " %,  end-to-end " + format("%.2f", r.end_to_end_m) + " m";
-  config.x_label = "time since GT start [s]";
-  config.y_label = "error [m]";
-  config.legend_corner = Plot2D::Config::Corner::kTopLeft;
-  Plot2D errors(config);
+std::string errorOverTimeSvg(const EvalResult& r) {
+  SvgPlot::Config c;
+  c.id = "eval-error";
+  c.title = "Position error after alignment: coverage " + format("%.1f", 100.0 * r.coverage) + " %, end to end " +
+            format("%.1f", 100.0 * r.end_to_end_m) + " cm";
+  c.x_label = "time since the ground truth's start [s]";
+  c.y_label = "error [cm]";
+  c.width_px = kWidthPx, c.height_px = kErrorHeightPx;
+  SvgPlot plot(c);
   std::vector<Eigen::Vector2d> series;
-  series.reserve(r.times_s.size());
-  for (size_t i = 0; i < r.times_s.size() && i < r.errors_m.size(); ++i)
-    series.emplace_back(r.times_s[i], r.errors_m[i]);
-  double t_lo = 0.0, t_hi = 1.0, e_hi = 0.0;
-  if (!series.empty()) {
-    t_lo = series.front().x();
-    t_hi = series.back().x();
+  double e_high = 0.0;
+  for (std::size_t i = 0; i < r.times_s.size() && i < r.errors_m.size(); ++i) {
+    series.emplace_back(r.times_s[i], 100.0 * r.errors_m[i]);
+    e_high = std::max(e_high, 100.0 * r.errors_m[i]);
   }
-  for (double e : r.errors_m) e_hi = std::max(e_hi, e);
-  if (t_hi > t_lo) errors.setXRange(t_lo, t_hi);
-  // Errors are >= 0, so the axis starts at 0; the headroom above keeps the legend off the curve.
-  errors.setYRange(0.0, e_hi > 0.0 ? 1.35 * e_hi : 1.0);
-  if (std::isfinite(r.ate_rmse_m) && t_hi > t_lo)
-    errors.addLine({{t_lo, r.ate_rmse_m}, {t_hi, r.ate_rmse_m}}, colors::kGrey, 1.0, "RMSE");
-  errors.addLine(std::move(series), colors::kEstimate, 2.0, "ATE");
-  errors.draw(canvas, 0, kTopViewHeightPx, kWidthPx, kErrorHeightPx);
-  return canvas;
+  const double t_low = series.empty() ? 0.0 : series.front().x(), t_high = series.empty() ? 1.0 : series.back().x();
+  if (t_high > t_low) plot.xRange(t_low, t_high);
+  plot.yRange(0.0, e_high > 0.0 ? 1.2 * e_high : 1.0);  // errors are >= 0: the axis starts at 0
+  if (std::isfinite(r.ate_rmse_m) && t_high > t_low)
+    plot.line({{t_low, 100.0 * r.ate_rmse_m}, {t_high, 100.0 * r.ate_rmse_m}}, colors::kReference, 1.0, "RMSE");
+  plot.line(std::move(series), colors::kEstimate, 1.5, "error");
+  return plot.render();
 }
 
-void plotEvaluation(const EvalResult& result, const std::string& png_path) {
-  renderEvaluation(result).savePng(png_path);
+std::string evaluationFigure(const EvalResult& r, bool html) {
+  const std::string top = topViewSvg(r), error = errorOverTimeSvg(r);
+  if (html)
+    return "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>mmlio evaluation</title>"
+           "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; style-src 'unsafe-inline'\">"
+           "<style>body{font-family:system-ui,sans-serif;margin:20px;color:#1d2127}</style></head><body>\n"
+           "<h1>ATE " +
+           format("%.2f", 100.0 * r.ate_rmse_m) + " cm over " + format("%.1f", r.path_length_m) + " m</h1>\n" + top +
+           error + "</body></html>\n";
+  // One SVG holding both, the error plot below the top view.
+  return "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + std::to_string(kWidthPx) + "\" height=\"" +
+         std::to_string(kTopViewHeightPx + kErrorHeightPx) +
+         "\">\n<rect width=\"100%\" height=\"100%\" fill=\"#fff\"/>" + top + "<g transform=\"translate(0," +
+         std::to_string(kTopViewHeightPx) + ")\">" + error + "</g></svg>\n";
 }
 
 }  // namespace mmlio::eval

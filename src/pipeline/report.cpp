@@ -1,68 +1,52 @@
 #include "mmlio/pipeline/report.hpp"
 
-#include <algorithm>
-#include <cmath>
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "mmlio/core/log.hpp"
-#include "mmlio/eval/canvas.hpp"
-#include "mmlio/eval/plot2d.hpp"
-#include "mmlio/eval/plot_evaluation.hpp"
 #include "mmlio/io/trajectory_writer.hpp"
+#include "mmlio/pipeline/report_html.hpp"
 
 namespace mmlio::pipeline {
+namespace {
 
-void plotMapTopView(const std::string& png_path, const std::vector<Point>& map_world, const Trajectory& trajectory,
-                    double slice_half_height_m) {
-  double mean_z = 0.0;
-  for (const auto& p : trajectory) mean_z += p.T_world_body.translation().z();
-  if (!trajectory.empty()) mean_z /= trajectory.size();
+std::string readText(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return {};
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
 
-  std::vector<Eigen::Vector2d> xy;
-  std::vector<eval::Rgb> colors;
-  const std::size_t stride = std::max<std::size_t>(1, map_world.size() / 400000);
-  for (std::size_t i = 0; i < map_world.size(); i += stride) {
-    const Point& p = map_world[i];
-    const double dz = p.xyz.z() - mean_z;
-    if (std::abs(dz) > slice_half_height_m) continue;
-    // Darker = higher, so furniture stands out from the walls' lower parts.
-    const auto g = static_cast<std::uint8_t>(170 - 120 * (dz + slice_half_height_m) / (2 * slice_half_height_m));
-    xy.emplace_back(p.xyz.x(), p.xyz.y());
-    colors.push_back({g, g, g});
-  }
-  std::vector<Eigen::Vector2d> path;
-  for (const auto& p : trajectory)
-    path.emplace_back(p.T_world_body.translation().x(), p.T_world_body.translation().y());
+}  // namespace
 
-  eval::Plot2D::Config pc;
-  pc.title = "map slice (|z - z_traj| < " + std::to_string(slice_half_height_m).substr(0, 3) + " m) and trajectory";
-  pc.x_label = "x [m]";
-  pc.y_label = "y [m]";
-  pc.equal_aspect = true;
-  eval::Plot2D plot(pc);
-  plot.addScatter(xy, colors, 0.0);
-  if (!path.empty()) {
-    plot.addLine(path, eval::colors::kEstimate, 2.0, "trajectory");
-    plot.addMarker(path.front(), eval::colors::kEstimate, 5.0, "start");
-  }
-  eval::Canvas canvas(1600, 1200);
-  plot.draw(canvas, 0, 0, canvas.width(), canvas.height());
-  canvas.savePng(png_path);
+HtmlScripts loadHtmlScripts() {
+  const char* env = std::getenv("MMLIO_JS_DIR");
+  const std::filesystem::path dir = env && *env ? env : MMLIO_JS_DIR;
+  HtmlScripts scripts;
+  scripts.three = readText(dir / "three/three.min.js");
+  scripts.orbit_controls = readText(dir / "three/examples/js/controls/OrbitControls.js");
+  // MIT: the copies travel with their copyright notice (the minified build has none).
+  const std::string notice =
+      "/* three.js (Debian libjs-three), Copyright (c) 2010-2017 three.js authors, MIT licence */\n";
+  if (!scripts.three.empty()) scripts.three = notice + scripts.three;
+  if (!scripts.orbit_controls.empty()) scripts.orbit_controls = notice + scripts.orbit_controls;
+  if (!scripts.available())
+    log::warn("report.html without its 3D view: three.js not found in ", dir.string(),
+              " (apt-get install libjs-three, or set MMLIO_JS_DIR)");
+  return scripts;
 }
 
 void writeReports(const std::string& dir, RunReport& report, const Trajectory& trajectory,
                   const std::vector<Point>& map_world, const std::string& gt_path) {
-  report.figures.clear();
-  try {
-    plotMapTopView(dir + "map_top.png", map_world, trajectory);
-    report.figures["map_top"] = dir + "map_top.png";
-    if (!gt_path.empty()) {
+  if (!gt_path.empty()) {
+    try {
       report.evaluation = eval::evaluate(io::readTum(gt_path), trajectory);
-      eval::plotEvaluation(*report.evaluation, dir + "evaluation.png");
-      report.figures["evaluation"] = dir + "evaluation.png";
+    } catch (const std::exception& e) {
+      log::warn("no evaluation against ", gt_path, ": ", e.what());
     }
-  } catch (const std::exception& e) {
-    log::emit(log::Level::kWarn, "report figures skipped: ", e.what());
   }
   if (!report.run.config_yaml.empty())
     io::writeFileAtomically(dir + "config_used.yaml", [&](std::ostream& os) {
@@ -72,6 +56,11 @@ void writeReports(const std::string& dir, RunReport& report, const Trajectory& t
     });
   io::writeFileAtomically(dir + "report.json", [&](std::ostream& os) { os << toJson(report).dump(2) << '\n'; });
   io::writeFileAtomically(dir + "report.md", [&](std::ostream& os) { os << toMarkdown(report); });
+  const std::string title =
+      report.input.source.empty() ? "run" : std::filesystem::path(report.input.source).filename().string();
+  io::writeFileAtomically(dir + "report.html", [&](std::ostream& os) {
+    os << toHtml(report, trajectory, map_world, loadHtmlScripts(), title);
+  });
 }
 
 }  // namespace mmlio::pipeline

@@ -1,6 +1,6 @@
 #include "mmlio/pipeline/run_report.hpp"
 
-#include <set>
+#include <cstdio>
 #include <vector>
 
 namespace mmlio::pipeline {
@@ -21,54 +21,6 @@ Json evaluationJson(const eval::EvalResult& ev) {
   j["coverage"] = ev.coverage;
   j["associated_poses"] = ev.num_associated;
   return j;
-}
-
-// A table cell: '|' would end it.
-std::string cell(const Json& v) {
-  std::string text = plainText(v), out;
-  for (char c : text) out += c == '|' ? std::string("\\|") : std::string(1, c);
-  return out;
-}
-
-// Renders a report object generically so report.md never disagrees with report.json: scalars and
-// arrays as a two-column table, objects of objects (timing, per-LiDAR figures) as one table with
-// a column per inner key, and a section mixing both (input, degeneracy) as its fields' table
-// followed by one subsection per object.
-void renderSection(std::string& md, const std::string& title, const Json& section, int level = 2) {
-  md += "\n" + std::string(static_cast<std::size_t>(level), '#') + " " + title + "\n\n";
-  if (section.empty()) {
-    md += "(none)\n";
-    return;
-  }
-  bool nested = false, all_nested = true;
-  for (const auto& [k, v] : section.items()) {
-    nested |= v.is_object();
-    all_nested &= v.is_object();
-  }
-  if (!all_nested) {
-    md += "| field | value |\n|---|---|\n";
-    for (const auto& [k, v] : section.items())
-      if (!v.is_object()) md += "| " + k + " | " + cell(v) + " |\n";
-    if (nested)
-      for (const auto& [k, v] : section.items())
-        if (v.is_object()) renderSection(md, title + " / " + k, v, level + 1);
-    return;
-  }
-  std::vector<std::string> columns;
-  std::set<std::string> seen;
-  for (const auto& [k, v] : section.items())
-    for (const auto& [ik, iv] : v.items())
-      if (seen.insert(ik).second) columns.push_back(ik);
-  md += "| " + title + " |";
-  for (const auto& c : columns) md += " " + c + " |";
-  md += "\n|---|";
-  for (std::size_t i = 0; i < columns.size(); ++i) md += "---|";
-  md += "\n";
-  for (const auto& [k, v] : section.items()) {
-    md += "| " + k + " |";
-    for (const auto& c : columns) md += " " + (v.contains(c) ? cell(v[c]) : std::string()) + " |";
-    md += "\n";
-  }
 }
 
 }  // namespace
@@ -201,27 +153,36 @@ Json toJson(const RunReport& r) {
     if (!r.outputs.dynamic_map.empty()) out["dynamic_map"] = r.outputs.dynamic_map;
   }
   if (r.evaluation) rep["evaluation"] = evaluationJson(*r.evaluation);
-  rep["figures"] = Json::object();
-  for (const auto& [name, path] : r.figures) rep["figures"][name] = path;
   return rep;
 }
 
-std::string toMarkdown(const RunReport& report) {
-  Json rep = toJson(report);
-  // The config is a file of its own next to the report, not a table cell.
-  if (rep["run"].contains("config_yaml")) {
-    rep["run"].erase("config_yaml");
-    rep["run"]["config"] = "config_used.yaml";
+std::string toMarkdown(const RunReport& r) {
+  const auto fixed = [](double v, int decimals) {
+    char text[48];
+    std::snprintf(text, sizeof(text), "%.*f", decimals, v);
+    return std::string(text);
+  };
+  std::string md = "# mmlio run: " + (r.input.source.empty() ? std::string("live") : r.input.source) + "\n\n";
+  md += "**" + r.status + "**, " + (r.untrusted.empty() ? "trusted" : "**untrusted**: " + r.untrusted) + "\n\n";
+  md += "| | |\n|---|---|\n";
+  md += "| mode | " + r.input.mode + " |\n";
+  md += "| duration | " + fixed(r.input.duration_s, 1) + " s (" + fixed(r.realtime_factor, 1) + "x real time) |\n";
+  if (r.evaluation) {
+    const eval::EvalResult& e = *r.evaluation;
+    md += "| ATE | " + fixed(100.0 * e.ate_rmse_m, 2) + " cm (end to end " + fixed(100.0 * e.end_to_end_m, 1) +
+          " cm over " + fixed(e.path_length_m, 1) + " m) |\n";
   }
-  std::string md = "# mmlio run report\n\n";
-  for (const auto& [k, v] : rep.items())
-    if (!v.is_object()) md += "- **" + k + "**: " + plainText(v) + "\n";
-  for (const auto& [k, v] : rep.items())
-    if (v.is_object() && k != "figures") renderSection(md, k, v);
-  if (!report.figures.empty()) {
-    md += "\n## figures\n";
-    for (const auto& [name, path] : report.figures) md += "\n![" + name + "](" + name + ".png)\n";
-  }
+  md += "| sweeps | " + std::to_string(r.sweeps.tracked) + " tracked, " + std::to_string(r.sweeps.degraded) +
+        " degraded, " + std::to_string(r.sweeps.degenerate) + " degenerate |\n";
+  md += "| loops closed | " + std::to_string(r.mapping.accepted) + " of " + std::to_string(r.mapping.attempts) +
+        " tried |\n";
+  md += "| input | " + r.inputStatus() + " |\n";
+  if (!r.mapping_error.empty()) md += "| mapping | failed: " + r.mapping_error + " |\n";
+  md += "| map | " + std::to_string(r.outputs.map_points) + " points |\n";
+  md += "| peak memory | " + fixed(r.memory.peak_rss_mb, 0) + " MB |\n";
+  md +=
+      "\nThe map in 3D, the plots and every field: [report.html](report.html); the data: report.json; the "
+      "settings that rerun it: config_used.yaml.\n";
   return md;
 }
 

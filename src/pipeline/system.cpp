@@ -53,6 +53,16 @@ void System::onSweep(estimator::SweepResult r) {
   }
   StageTimes times = r.times_ms;
   const Stamp stamp_ns = r.state.stamp_ns;
+  RunReport::SweepSample sample;
+  sample.stamp_ns = odometry_poses_.back().stamp_ns;
+  for (const auto& l : r.lidars) {
+    sample.edges += static_cast<float>(l.edges);
+    sample.planes += static_cast<float>(l.planes);
+  }
+  sample.weakest_points = static_cast<float>(r.degeneracy.translation_points);
+  sample.degenerate = r.registered && r.degeneracy.any();
+  sample.degraded = r.status == estimator::SweepResult::Status::kDegraded;
+  sample.keyframe = r.keyframe;
   // The back end works on the sweep on its own thread: it takes it, or a copy if an observer (the
   // live node publishing the sweep's points) still needs it.
   if (!finished_) {
@@ -62,6 +72,9 @@ void System::onSweep(estimator::SweepResult r) {
       mapping_.addSweep(std::move(r));
   }
   times.emplace_back("mapping_handoff", handoff.lapMs());
+  for (const auto& [stage, ms] : times)
+    if (stage != "total") sample.total_ms += static_cast<float>(ms);
+  timeline_.push_back(sample);
   timing_.add(times);
   if (timing_observer_) timing_observer_(stamp_ns, times);
   if (observer_) observer_(r);
@@ -125,6 +138,7 @@ RunReport System::report() const {
   r.degeneracy = degeneracy_.toJson(first_imu_ns_);
   r.features = lidars_;
   r.timing = timing_;
+  r.timeline = timeline_;
   r.timing_backend = mapping_.timing();
   r.wall_time_s = wall_.elapsedMs() * 1e-3;
   const double sensor_s = first_imu_ns_ > 0 ? toSec(odometry().lastImuNs() - first_imu_ns_) : 0.0;

@@ -259,7 +259,7 @@ TEST(RunBag, TheReportNamesItsMmlioAndTheConfigThatRerunsTheRunExactly) {
   std::ifstream in(options.out_dir + "/report.json");
   const Json report = Json::parse(in);
   const Json& run = report["run"];
-  EXPECT_EQ(run["schema_version"].get<int>(), 1);
+  EXPECT_EQ(run["schema_version"].get<int>(), 2);
   EXPECT_FALSE(run["mmlio_version"].get<std::string>().empty());
   EXPECT_FALSE(run["commit"].get<std::string>().empty());
   EXPECT_EQ(run["calibration"].get<std::string>(), "config");

@@ -3,6 +3,7 @@
 #include <functional>
 #include <limits>
 
+#include "mmlio/pipeline/report_html.hpp"
 #include "mmlio/pipeline/run_report.hpp"
 
 namespace mmlio::pipeline {
@@ -37,40 +38,78 @@ TEST(RunReport, JsonKeepsSectionOrderAndWritesNonFiniteAsNull) {
   EXPECT_EQ(keys[1], "trustworthy");
   EXPECT_EQ(keys[2], "run");  // which mmlio, which settings: what reproduces the run
   EXPECT_EQ(keys[3], "input");
-  EXPECT_EQ(j["run"]["schema_version"], 1);
+  EXPECT_EQ(j["run"]["schema_version"], 2);
   EXPECT_EQ(j["input"]["source"], "office.bag");
   EXPECT_EQ(j["input"]["imu_dropped"]["non_finite"], 3);
   EXPECT_EQ(j["features"]["livox"]["mean_edges"], 15.0);
   EXPECT_NE(j.dump().find("\"wall_time_s\":null"), std::string::npos);
 }
 
-TEST(RunReport, MarkdownShowsEveryFieldWithItsValue) {
-  const RunReport r = sampleReport();
-  const Json j = toJson(r);
+TEST(RunReport, MarkdownSummarisesAndPointsToThePage) {
+  RunReport r = sampleReport();
+  r.untrusted = "drift sigma 0.48 m";
+  eval::EvalResult e;
+  e.ate_rmse_m = 0.0061;
+  e.path_length_m = 42.0;
+  r.evaluation = e;
   const std::string md = toMarkdown(r);
-  // Every leaf of report.json appears in report.md under its own name, with a non-empty value.
+  EXPECT_NE(md.find("# mmlio run: office.bag"), std::string::npos);
+  EXPECT_NE(md.find("**degraded: input dropped**, **untrusted**: drift sigma 0.48 m"), std::string::npos);
+  EXPECT_NE(md.find("| ATE | 0.61 cm"), std::string::npos);
+  EXPECT_NE(md.find("| sweeps | 420 tracked"), std::string::npos);
+  EXPECT_NE(md.find("[report.html](report.html)"), std::string::npos);
+}
+
+TEST(RunReport, HtmlHoldsEveryFieldOfTheJson) {
+  RunReport r = sampleReport();
+  r.timeline.push_back({fromSec(1.0), 10.f, 200.f, 25.f, 3.f, true, false, true});
+  r.timeline.push_back({fromSec(1.1), 12.f, 210.f, 80.f, 3.5f, false, false, false});
+  Trajectory trajectory = {{fromSec(1.0), Eigen::Isometry3d::Identity()},
+                           {fromSec(1.1), Eigen::Isometry3d(Eigen::Translation3d(1.0, 0.0, 0.0))}};
+  std::vector<Point> map(3);
+  map[1].xyz = Eigen::Vector3f(1.f, 2.f, 3.f);
+  const std::string html = toHtml(r, trajectory, map, HtmlScripts{}, "office.bag");
   std::function<void(const Json&, const std::string&)> check = [&](const Json& node, const std::string& path) {
     for (const auto& [k, v] : node.items()) {
       if (v.is_object() && !v.empty()) {
         check(v, path + k + ".");
         continue;
       }
-      if (k == "figures") continue;      // pictures, shown as images
-      if (k == "config_yaml") continue;  // a file of its own, config_used.yaml, named in the run section
-      const std::size_t at = md.find(k);
-      ASSERT_NE(at, std::string::npos) << path + k << " missing from report.md";
+      EXPECT_NE(html.find(">" + k + "<"), std::string::npos) << path + k << " missing from report.html";
     }
   };
-  check(j, "");
-  EXPECT_NE(md.find("| source | office.bag |"), std::string::npos);
-  EXPECT_NE(md.find("| config | config/hvi.yaml |"), std::string::npos);
-  EXPECT_NE(md.find("| mode | hvi |"), std::string::npos);
-  EXPECT_NE(md.find("| config | config_used.yaml |"), std::string::npos);
-  EXPECT_NE(md.find("| duration_s | 43.025 |"), std::string::npos);
-  // A '|' in a value must not split the table row.
-  EXPECT_NE(md.find("| message | \\|g\\|=9.802 m/s^2 |"), std::string::npos);
-  // Per-LiDAR figures: one row per LiDAR, one column per figure.
-  EXPECT_NE(md.find("| livox | 2 | 0 | 15 | 0 | 0 |"), std::string::npos);
+  check(toJson(r), "");
+  EXPECT_NE(html.find("data-figure=\"path_m\""), std::string::npos);
+  EXPECT_NE(html.find(">1.0 m<"), std::string::npos);  // the path length
+  // Without three.js the page says how to get the 3D view and keeps the plots.
+  EXPECT_NE(html.find("apt-get install libjs-three"), std::string::npos);
+  EXPECT_NE(html.find("Features per sweep"), std::string::npos);
+  EXPECT_EQ(html.find("<script src"), std::string::npos);
+  EXPECT_NE(html.find("Content-Security-Policy"), std::string::npos);
+}
+
+TEST(RunReport, HtmlEmbedsTheMapForTheViewer) {
+  RunReport r = sampleReport();
+  Trajectory trajectory = {{fromSec(1.0), Eigen::Isometry3d(Eigen::Translation3d(100.0, 0.0, 0.0))}};
+  std::vector<Point> map(10);
+  for (int i = 0; i < 10; ++i) map[i].xyz = Eigen::Vector3f(100.f + i, 0.f, 0.f);
+  HtmlReportLimits limits;
+  limits.max_map_points = 4;  // every third point
+  const std::string html = toHtml(r, trajectory, map, HtmlScripts{"/*three*/", "/*orbit*/"}, "x", limits);
+  EXPECT_NE(html.find("\"points\":4,\"poses\":1,\"keyframes\":0,\"loops\":0,\"x_low\":0.000,\"x_high\":9.000"),
+            std::string::npos);  // relative to the trajectory's start, thinned
+  EXPECT_NE(html.find("<script>/*three*/</script>"), std::string::npos);
+  EXPECT_NE(html.find("4 of 10 map points"), std::string::npos);
+}
+
+TEST(RunReport, Base64MatchesRfc4648) {
+  const std::string text = "foobar";
+  const auto* bytes = reinterpret_cast<const std::uint8_t*>(text.data());
+  EXPECT_EQ(base64(bytes, 0), "");
+  EXPECT_EQ(base64(bytes, 1), "Zg==");
+  EXPECT_EQ(base64(bytes, 2), "Zm8=");
+  EXPECT_EQ(base64(bytes, 3), "Zm9v");
+  EXPECT_EQ(base64(bytes, 6), "Zm9vYmFy");
 }
 
 TEST(RunReport, MappingStatesLoopClosureAndABackEndFailure) {

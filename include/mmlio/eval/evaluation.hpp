@@ -34,6 +34,7 @@ struct EvalResult {
   double path_length_m = 0.0;    // GT path length over the associated poses
   double scale = 1.0;            // alignment scale (1 unless EvalOptions::scale)
 
+  double gt_start_s = 0.0;                                     // stamp of the first GT pose, s
   std::vector<double> times_s;                                 // per associated pose: seconds since the first GT pose
   std::vector<double> errors_m;                                // per associated pose: position error after alignment
   Eigen::Isometry3d T_gt_est = Eigen::Isometry3d::Identity();  // estimate world -> GT world (positions)

@@ -1,23 +1,18 @@
 #pragma once
-// Figures of a trajectory evaluation, as PNG: a top view (x-y, equal aspect) of ground truth
-// and estimate, and the absolute position error over time.
+// Figures of a trajectory evaluation as SVG: a top view (x-y, equal aspect) of ground truth and
+// estimate, and the absolute position error over time.
 
-#include <Eigen/Core>
 #include <string>
-#include <vector>
 
-#include "mmlio/eval/canvas.hpp"
 #include "mmlio/eval/evaluation.hpp"
 
 namespace mmlio::eval {
 
-/// Top view of GT (colors::kGroundTruth) and estimate (colors::kEstimate) with start markers.
-void plotTrajectories(const std::string& png_path, const std::vector<Eigen::Vector3d>& gt_xyz,
-                      const std::vector<Eigen::Vector3d>& est_xyz, const std::string& title);
-
-/// The two-panel evaluation figure (top view over error-vs-time, metrics in the titles), in memory.
-Canvas renderEvaluation(const EvalResult& result);
-/// renderEvaluation written to `png_path`.
-void plotEvaluation(const EvalResult& result, const std::string& png_path);
+/// Top view of ground truth and the aligned estimate, with the start marked.
+std::string topViewSvg(const EvalResult& result);
+/// Position error over time with the RMSE as a reference line.
+std::string errorOverTimeSvg(const EvalResult& result);
+/// Both figures with the metrics: a self-contained HTML page (path ends in .html) or one SVG.
+std::string evaluationFigure(const EvalResult& result, bool html);
 
 }  // namespace mmlio::eval

@@ -69,7 +69,7 @@ struct RunReport {
 
   // What reproduces the run: which mmlio, with which settings (report.json: run).
   struct Provenance {
-    static constexpr int kSchemaVersion = 1;  // of report.json; raised when a field changes meaning
+    static constexpr int kSchemaVersion = 2;  // of report.json; raised when a field changes meaning
     std::string mmlio_version, commit;
     std::string calibration;  // where the extrinsics came from: config, a calibration file, auto
     std::string config_yaml;  // the effective config, extrinsics applied (also written as config_used.yaml)
@@ -91,7 +91,16 @@ struct RunReport {
   Memory memory;
   Outputs outputs;
   std::optional<eval::EvalResult> evaluation;  // with ground truth
-  std::map<std::string, std::string> figures;
+
+  // One sample per tracked or degraded sweep, for report.html's plots over time (not in report.json).
+  struct SweepSample {
+    Stamp stamp_ns = 0;  // input clock, as the trajectory's
+    float edges = 0.f, planes = 0.f;
+    float weakest_points = 0.f;  // effective points along the least constrained translation
+    float total_ms = 0.f;
+    bool degenerate = false, degraded = false, keyframe = false;
+  };
+  std::vector<SweepSample> timeline;
 
   /// True when input was dropped, skipped, re-timed or cut short (the status then says "degraded").
   bool inputDegraded() const;
@@ -100,7 +109,7 @@ struct RunReport {
 };
 
 Json toJson(const RunReport& report);
-/// report.md: every field of toJson(report), sections as tables.
+/// report.md: the summary (status, trust, ATE, sweeps, loops, input), pointing to report.html.
 std::string toMarkdown(const RunReport& report);
 
 }  // namespace mmlio::pipeline

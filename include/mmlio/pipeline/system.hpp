@@ -84,6 +84,7 @@ class System {
   RunReport::Dynamic dynamic_;
   std::map<std::string, RunReport::LidarFigures> lidars_;
   StageStats timing_;
+  std::vector<RunReport::SweepSample> timeline_;
   Trajectory odometry_poses_;
   Stamp first_imu_ns_ = 0;
   std::string backend_error_;
