@@ -317,6 +317,33 @@ std::string plotsHtml(const RunReport& r, const Trajectory& trajectory, const st
   return html + "</div></section>\n";
 }
 
+// ---- how the run started, per LiDAR ----
+
+std::string startupHtml(const RunReport& r) {
+  std::string html = "<section><h2>Start-up and sensors</h2><table id=\"startup\">";
+  const auto row = [&html](const std::string& k, const std::string& v) {
+    html += "<tr><th>" + xmlEscape(k) + "</th><td>" + xmlEscape(v) + "</td></tr>";
+  };
+  row("IMU initialisation",
+      std::string(r.imu_init.ok ? "" : "FAILED: ") + (r.imu_init.forced ? "forced: " : "") + r.imu_init.message);
+  row("gravity",
+      fixed(r.imu_init.gravity_norm_m_s2, 3) + " m/s^2, accelerometer scale " + fixed(r.input.imu_acc_scale, 5));
+  row("gyroscope bias", fixed(r.imu_init.gyro_bias.x(), 4) + ", " + fixed(r.imu_init.gyro_bias.y(), 4) + ", " +
+                            fixed(r.imu_init.gyro_bias.z(), 4) + " rad/s");
+  row("extrinsics", r.run.calibration + " (config_used.yaml holds them as run)");
+  row("mode", r.input.mode + ", config " + (r.input.config.empty() ? "built-in defaults" : r.input.config));
+  html +=
+      "</table><table id=\"lidars\"><tr><th>LiDAR</th><th>sweeps</th><th>points / sweep</th>"
+      "<th>edges / sweep</th><th>planes / sweep</th><th>bad frames</th></tr>";
+  for (const auto& [name, f] : r.features) {
+    const double n = static_cast<double>(std::max<std::size_t>(1, f.sweeps));
+    html += "<tr><td>" + xmlEscape(name) + "</td><td>" + std::to_string(f.sweeps) + "</td><td>" +
+            fixed(f.points / n, 0) + "</td><td>" + fixed(f.edges / n, 0) + "</td><td>" + fixed(f.planes / n, 0) +
+            "</td><td>" + std::to_string(f.bad_frames) + "</td></tr>";
+  }
+  return html + "</table></section>\n";
+}
+
 // ---- every field, collapsed ----
 
 std::string scalarText(const Json& v) {
@@ -406,6 +433,7 @@ std::string toHtml(const RunReport& report, const Trajectory& trajectory, const 
   html += cardsHtml(summaryCards(report, trajectory));
   html += view3dHtml(report, trajectory, map_world, scripts, limits);
   html += plotsHtml(report, trajectory, map_world, limits);
+  html += startupHtml(report);
   html += detailsHtml(toJson(report));
   html += "<footer>Written by mmlio " + xmlEscape(report.run.mmlio_version) +
           ". Self-contained: the map, plots and scripts are inside this file.</footer>\n</main>\n";
