@@ -2,6 +2,9 @@
 
 #include <tbb/parallel_for.h>
 
+#include "mmlio/core/flat_key_index.hpp"
+#include "mmlio/core/voxel_key.hpp"
+
 namespace mmlio::estimator {
 
 void SweepView::place(const Eigen::Isometry3d& T_world_body) {
@@ -18,6 +21,29 @@ std::size_t SweepView::memoryBytes() const {
   std::size_t n = sizeof(*this);
   for (const SensorView& s : sensors) n += sizeof(s) + s.image.memoryBytes();
   return n;
+}
+
+bool moverFound(const std::vector<Eigen::Vector3d>& world_points, const std::vector<std::uint8_t>& moved) {
+  FlatKeyIndex cells;  // 1 m cell -> count
+  std::vector<int> counts;
+  for (std::size_t i = 0; i < moved.size() && i < world_points.size(); ++i) {
+    if (!moved[i]) continue;
+    const auto [c, added] = cells.insert(voxelKeyOf(world_points[i], 1.0), static_cast<std::uint32_t>(counts.size()));
+    if (added) counts.push_back(0);
+    if (++counts[c] >= kMoverReturns) return true;
+  }
+  return false;
+}
+
+bool MoverWatch::shouldJudge(Stamp now) const {
+  if (cfg_.quiet_interval_s <= 0 || now <= movers_until_ns_) return true;
+  return last_judged_ns_ == std::numeric_limits<Stamp>::min() || now < last_judged_ns_ ||
+         toSec(now - last_judged_ns_) >= cfg_.quiet_interval_s - 0.005;  // sweep stamps jitter
+}
+
+void MoverWatch::judged(Stamp now, bool mover_found) {
+  last_judged_ns_ = now;
+  if (mover_found) movers_until_ns_ = now + fromSec(cfg_.hold_s);
 }
 
 void FreeSpaceMemory::remember(std::shared_ptr<const SweepView> view) {

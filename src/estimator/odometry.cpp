@@ -97,6 +97,7 @@ struct Odometry::Impl {
   std::vector<char> edge_poor;         // this sweep's solid-state frames the edge count marks bad
   PredictionDrift drift;               // how far the IMU prediction may have drifted, per direction
   FreeSpaceMemory free_space;
+  MoverWatch mover_watch;
   std::shared_ptr<SweepView> view;                       // this sweep's, while it is processed
   bool in_imu_gap = false;                               // the last sweep had no usable IMU
   Eigen::Vector3d omega_body = Eigen::Vector3d::Zero();  // last sweep's turn rate, rad/s
@@ -113,7 +114,8 @@ struct Odometry::Impl {
         edge_map(2.5 * cfg.map_voxel_m, 60),
         plane_map(2.5 * cfg.map_voxel_m, 60, cfg.voxel_planes),
         window(windowConfig(cfg), g_world),
-        free_space(cfg.dynamic) {}
+        free_space(cfg.dynamic),
+        mover_watch(cfg.dynamic) {}
 
   static SlidingWindowConfig windowConfig(const OdometryConfig& c) {
     SlidingWindowConfig w;
@@ -151,8 +153,9 @@ struct Odometry::Impl {
   }
 
   // ---- stage: de-skew, features, bad frame, merge ----
-  // The sweep's scans are moved into their de-skewed copies.
-  Features extract(lidar::AlignedSweep& sweep, const lidar::SweepMotion& motion, SweepResult* out) {
+  // The sweep's scans are moved into their de-skewed copies. with_view: also this sweep's view of
+  // free space (a range image per LiDAR).
+  Features extract(lidar::AlignedSweep& sweep, const lidar::SweepMotion& motion, bool with_view, SweepResult* out) {
     const double end_s = toSec(sweep.end_ns - sweep.start_ns);
     edge_poor.assign(lidars.size(), 0);
     std::vector<LidarScan*> scans;
@@ -162,7 +165,7 @@ struct Odometry::Impl {
     std::vector<LidarScan> deskewed(scans.size());
     std::vector<LidarFrameStats> stats(scans.size());
     std::vector<char> surface_points(scans.size(), 0);  // every return is matched as a plane point
-    std::vector<SensorView> views(cfg.dynamic.enabled ? scans.size() : 0);
+    std::vector<SensorView> views(with_view ? scans.size() : 0);
     tbb::parallel_for(std::size_t(0), scans.size(), [&](std::size_t i) {
       const LidarSetup& setup = *setupOf(scans[i]->sensor);
       deskewed[i] = std::move(*scans[i]);
@@ -444,12 +447,14 @@ struct Odometry::Impl {
   }
 
   // ---- stage: returns on things that moved in (space an earlier sweep saw through) ----
-  void rejectMovedIn(Features* f, const Eigen::Isometry3d& T_world_body, Stamp now, SweepResult* out) const {
+  // Returns whether they include a mover (moverFound), not only the odd false return.
+  bool rejectMovedIn(Features* f, const Eigen::Isometry3d& T_world_body, Stamp now, SweepResult* out) const {
     std::vector<Eigen::Vector3d> world;
     world.reserve(f->edges.size() + f->planes.size());
     for (const auto& p : f->edges) world.push_back(T_world_body * p);
     for (const auto& p : f->planes) world.push_back(T_world_body * p);
     std::vector<std::uint8_t> moved = free_space.movedIn(world, now);
+    const bool mover = moverFound(world, moved);
     // Raw points follow their feature's voxel (features are voxel centroids of the raw points).
     const double inv = 1.0 / cfg.plane_voxel_m;
     const auto key = [inv](const Eigen::Vector3d& p, int dx = 0, int dy = 0, int dz = 0) {
@@ -495,7 +500,7 @@ struct Odometry::Impl {
     keep(&f->edges, &f->edge_source);
     keep(&f->planes, &f->plane_source);
     out->dynamic_points = static_cast<std::size_t>(std::count(moved.begin(), moved.end(), 1));
-    if (moved_voxels.empty() || out->points_body.empty()) return;
+    if (moved_voxels.empty() || out->points_body.empty()) return mover;
     std::size_t k = 0;
     for (const Point& p : out->points_body) {
       if (moved_voxels.contains(key(p.xyz.cast<double>())))
@@ -504,6 +509,7 @@ struct Odometry::Impl {
         out->points_body[k++] = p;
     }
     out->points_body.resize(k);
+    return mover;
   }
 
   /// Local map points the keyframe's sweep saw through were left by something that has gone.
@@ -657,9 +663,14 @@ SweepResult Odometry::process(lidar::AlignedSweep sweep) {
   d.in_imu_gap = !imu_ok;
   out.times_ms.emplace_back("imu_predict", watch.lapMs());
 
-  Features features = d.extract(sweep, motion, &out);
+  // Movers are looked for where they were lately, and at intervals elsewhere (MoverWatch); a
+  // keyframe's view carves the local map and goes to the back end's ghost removal.
+  out.judged_for_movers = d.cfg.dynamic.enabled && imu_ok && d.mover_watch.shouldJudge(sweep.end_ns);
+  const bool with_view = d.cfg.dynamic.enabled && (out.judged_for_movers || !imu_ok || d.isKeyframe(predicted));
+  Features features = d.extract(sweep, motion, with_view, &out);
   out.times_ms.emplace_back("deskew_features", watch.lapMs());
-  if (d.view && imu_ok) d.rejectMovedIn(&features, predicted.pose(), sweep.end_ns, &out);
+  if (out.judged_for_movers)
+    d.mover_watch.judged(sweep.end_ns, d.rejectMovedIn(&features, predicted.pose(), sweep.end_ns, &out));
   out.times_ms.emplace_back("dynamic", watch.lapMs());
 
   // ---- registration (of a budget of the features, if one is set; the window and the map take all) ----
@@ -706,10 +717,11 @@ SweepResult Odometry::process(lidar::AlignedSweep sweep) {
     out.times_ms.emplace_back("marginalize", watch.lapMs());
     d.addToMap(d.window.back());
     state = fromBlocks(d.window.back().x, state.stamp_ns);
-    if (d.view) {
-      d.view->place(state.pose());
+    if (d.view) d.view->place(state.pose());
+    // What the keyframe sees through in the local map was left by a mover: where none was found
+    // lately, only the odd mixed pixel, which would cost static points.
+    if (d.view && d.mover_watch.moversLately(state.stamp_ns))
       out.carved_points = d.carveMap(state.p_world, &out.moved_world);
-    }
     d.plane_map.refitPlanes();  // once, after this keyframe's additions, trim and carving
     d.pre_since_keyframe = std::make_shared<imu::Preintegration>(state.bias, d.cfg.imu_noise);
     ++d.keyframes;

@@ -123,6 +123,10 @@ void bindDynamic(YamlBinder& b, RigConfig& c) {
   b.field("clean_map", c.mapping.clean_map,
           "remove from map.pcd the points keyframes saw through (at least twice, and by at least a third of "
           "the keyframes that saw that spot): ghosts of what moved");
+  b.field("quiet_interval_s", c.estimator.dynamic.quiet_interval_s,
+          "where nothing has moved for dynamic.hold_s, sweeps are tested for movers this far apart, s (0: every "
+          "sweep); a mover found (8+ returns in a 1 m cell) makes every sweep tested again");
+  b.field("hold_s", c.estimator.dynamic.hold_s, "after a mover was found, every sweep is tested for this long, s");
 }
 
 void bindOutput(YamlBinder& b, RigConfig& c) {
@@ -321,6 +325,8 @@ void validateRigConfig(const RigConfig& cfg) {
   check.nonNegative(e.registration_max_edges, "odometry.registration_max_edges");
   check.nonNegative(e.registration_max_planes, "odometry.registration_max_planes");
   check.nonNegative(e.degeneracy.min_points, "odometry.degenerate_min_points");
+  check.nonNegative(e.dynamic.quiet_interval_s, "dynamic.quiet_interval_s");
+  check.nonNegative(e.dynamic.hold_s, "dynamic.hold_s");
   check.nonNegative(e.degeneracy.drift_m_s2, "odometry.degenerate_drift_m_s2");
   check.nonNegative(e.degeneracy.min_points_drifted, "odometry.degenerate_min_points_drifted");
   check.positive(e.map_voxel_m, "odometry.map_voxel_m");

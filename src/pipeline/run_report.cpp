@@ -133,6 +133,7 @@ Json toJson(const RunReport& r) {
 
   const RunReport::Dynamic& d = r.dynamic;
   rep["dynamic"] = {{"enabled", d.enabled},
+                    {"sweeps_judged", d.sweeps_judged},
                     {"feature_points_rejected", d.feature_points_rejected},
                     {"sweeps_with_rejections", d.sweeps_with_rejections},
                     {"local_map_points_carved", d.local_map_points_carved},

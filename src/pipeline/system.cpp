@@ -40,6 +40,7 @@ void System::onSweep(estimator::SweepResult r) {
   Stopwatch handoff;
   odometry_poses_.push_back({online_.externalStamp(r.state.stamp_ns), r.state.pose()});
   degeneracy_.add(r);
+  dynamic_.sweeps_judged += r.judged_for_movers;
   dynamic_.feature_points_rejected += r.dynamic_points;
   dynamic_.sweeps_with_rejections += r.dynamic_points > 0;
   dynamic_.local_map_points_carved += r.carved_points;

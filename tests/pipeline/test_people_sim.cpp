@@ -19,6 +19,7 @@ struct PeopleRun {
   double off_surface = 0.0;                 // map points farther than 10 cm from every static surface
   std::vector<Eigen::Vector3d> on_surface;  // the others (ground-truth frame)
   std::size_t rejected = 0, removed = 0;
+  std::size_t sweeps = 0, judged = 0;  // tested for movers
   Trajectory trajectory;
 };
 
@@ -40,6 +41,8 @@ PeopleRun runCorridor(int people, bool handle_dynamic, double duration_s = 25.0)
     if (r.status == estimator::SweepResult::Status::kInitializing) return;
     trajectory.push_back({r.state.stamp_ns, r.state.pose()});
     run.rejected += r.dynamic_points;
+    ++run.sweeps;
+    run.judged += r.judged_for_movers;
     mapping.addSweep(r);
   });
   testing::replay(sim, online);
@@ -75,6 +78,9 @@ TEST(PeopleOnSimulation, WalkersNeitherPullTheOdometryNorStayInTheMapAndTheStati
   EXPECT_GT(kept, 0.97);
   EXPECT_GT(handled.rejected, 1000u);
   EXPECT_LT(empty.removed, 0.001 * empty.on_surface.size());  // static surfaces are not mistaken for ghosts
+  // Where nothing moves, movers are looked for at intervals; with walkers about, in every sweep.
+  EXPECT_LT(empty.judged, 0.4 * empty.sweeps);
+  EXPECT_GT(handled.judged, 0.9 * handled.sweeps);
 }
 
 TEST(PeopleOnSimulation, TheSameSequenceGivesTheSameTrajectoryAndMapCleaning) {

@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -26,6 +27,33 @@ struct DynamicConfig {
   double look_back_min_s = 0.4;  // earlier sweeps tested: old enough for a walker to have moved
   double look_back_max_s = 1.2;  // ... a body length, young enough to overlap the current view
   double carve_radius_m = 20.0;  // local map points farther than this are not tested (image.max_range_m)
+  // Where nothing has moved lately, sweeps are judged this far apart (0: every sweep); see MoverWatch.
+  double quiet_interval_s = 0.4;
+  double hold_s = 5.0;  // after a mover was found, every sweep is judged this long
+};
+
+/// A mover among the flagged returns: kMoverReturns of them in one 1 m cell. A walker leaves dozens
+/// in most sweeps; a static scene gives scattered single returns (the simulated office and hall: at
+/// most 7 in a cell, in 4 of 1767 sweeps 8 or more).
+inline constexpr int kMoverReturns = 8;
+bool moverFound(const std::vector<Eigen::Vector3d>& world_points, const std::vector<std::uint8_t>& moved);
+
+/// When to look for movers. The visibility test costs a range image per LiDAR and a look-up per
+/// feature, every sweep, and where nothing moves it only finds the odd false return. So sweeps are
+/// judged quiet_interval_s apart (views that far apart still cover the look-back interval) until a
+/// judged sweep finds a mover, then every sweep for hold_s: a walker that enters is rejected from
+/// the next judged sweep on, and what reached the local map before is carved by the next keyframe.
+class MoverWatch {
+ public:
+  explicit MoverWatch(const DynamicConfig& config) : cfg_(config) {}
+  bool shouldJudge(Stamp now) const;
+  void judged(Stamp now, bool mover_found);
+  /// A mover was found within hold_s (with quiet_interval_s 0: always, as every sweep is judged).
+  bool moversLately(Stamp now) const { return cfg_.quiet_interval_s <= 0 || now <= movers_until_ns_; }
+
+ private:
+  DynamicConfig cfg_;
+  Stamp last_judged_ns_ = std::numeric_limits<Stamp>::min(), movers_until_ns_ = std::numeric_limits<Stamp>::min();
 };
 
 /// One LiDAR's view at the end of a sweep.

@@ -99,6 +99,7 @@ struct SweepResult {
   std::vector<Point> points_body;          // de-skewed points in the body frame at the window end
   bool points_body_thinned = false;        // ... only those the map takes (the mapping back end's hand-off)
   std::vector<Point> points_dynamic_body;  // ... those on things that moved in (left out of points_body)
+  bool judged_for_movers = false;          // its features were tested against earlier views (MoverWatch)
   std::size_t dynamic_points = 0;          // feature points rejected as moved in (registration, window, map)
   std::size_t carved_points = 0;           // local map points this sweep saw through (keyframes)
   // World positions where something moved this sweep: rejected features (with their neighbours)

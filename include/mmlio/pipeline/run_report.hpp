@@ -50,6 +50,7 @@ struct RunReport {
   };
   struct Dynamic {
     bool enabled = true, clean_map = true;
+    std::size_t sweeps_judged = 0;  // tested for movers (every sweep where they were lately, else at intervals)
     std::size_t feature_points_rejected = 0, sweeps_with_rejections = 0, local_map_points_carved = 0;
     std::size_t map_points_judged = 0, map_points_removed = 0, dynamic_map_points = 0;
     double map_assembly_s = 0.0;
