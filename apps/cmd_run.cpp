@@ -89,8 +89,8 @@ void run(const RunArgs& a) {
   options.gt_path = a.gt;
   options.max_duration_s = a.duration_s;
   options.stop = &g_stop;
-  options.max_degraded_fraction = a.max_degraded_percent / 100.0;
-  options.max_drift_sigma_m = a.max_drift_m;
+  options.trust.max_degraded_fraction = a.max_degraded_percent / 100.0;
+  options.trust.max_drift_sigma_m = a.max_drift_m;
   std::signal(SIGINT, onStopSignal);
   std::signal(SIGTERM, onStopSignal);
   const pipeline::RunResult r = pipeline::runBag(options);

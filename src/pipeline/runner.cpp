@@ -139,7 +139,12 @@ RunResult runBag(const RunOptions& options) {
                     : "IMU initialisation never succeeded in " + options.bag_path + ": " + odometry.imuInit().message);
   }
 
-  RunReport report = system.report();  // wall time and real-time factor from the System's start
+  // To the bag's end (its last message, whatever was readable), not just to the last IMU sample read.
+  // A run cut by --duration is judged on the span asked for.
+  const Stamp stream_end_ns = options.replays > 1 ? odometry.lastImuNs()
+                              : cut               ? std::min(source.endNs(), stop_ns)
+                                                  : std::max(odometry.lastImuNs(), source.endNs());
+  RunReport report = system.report(stream_end_ns, options.trust);
   RunReport::Input& input = report.input;
   input.source = options.bag_path;
   input.duration_s = toSec(source.endNs() - source.beginNs());
@@ -160,35 +165,7 @@ RunResult runBag(const RunOptions& options) {
                   : result.interrupted ? std::string("interrupted")
                                        : report.inputStatus();
 
-  // Trust: the stream after initialisation is covered by poses, and few of them were degraded.
-  const Trajectory& poses = system.odometryTrajectory();
-  if (!poses.empty()) {
-    // To the bag's end (its last message, whatever was readable), not just to the last IMU sample read.
-    // A run cut by --duration is judged on the span asked for.
-    const Stamp end_ns = options.replays > 1 ? odometry.lastImuNs()
-                         : cut               ? std::min(source.endNs(), stop_ns)
-                                             : std::max(odometry.lastImuNs(), source.endNs());
-    const double span_s = toSec(end_ns - poses.front().stamp_ns);
-    // The last sweep may end just past a --duration cut: never more than all of it covered.
-    report.sweeps.coverage =
-        span_s > 0 ? std::min(1.0, toSec(poses.back().stamp_ns - poses.front().stamp_ns) / span_s) : 1.0;
-    report.sweeps.degraded_fraction =
-        static_cast<double>(report.sweeps.degraded) / static_cast<double>(std::max<std::size_t>(poses.size(), 1));
-    const double limit = options.max_degraded_fraction;
-    char why[160] = "";
-    if (report.sweeps.degraded_fraction > limit)
-      std::snprintf(why, sizeof why, "%.0f %% of the sweeps degraded (limit %.0f %%)",
-                    100.0 * report.sweeps.degraded_fraction, 100.0 * limit);
-    else if (report.sweeps.coverage < 1.0 - limit)
-      std::snprintf(why, sizeof why, "poses cover %.0f %% of the stream after initialisation (limit %.0f %%)",
-                    100.0 * report.sweeps.coverage, 100.0 * (1.0 - limit));
-    else if (const double drift = report.degeneracy.value("max_drift_sigma_m", 0.0); drift > options.max_drift_sigma_m)
-      std::snprintf(
-          why, sizeof why,
-          "the IMU carried the position alone long enough to drift by %.2f m (1 sigma, at %.0f s; limit %.2f m)", drift,
-          report.degeneracy.value("max_drift_at_s", 0.0), options.max_drift_sigma_m);
-    result.untrusted = why;
-  }
+  result.untrusted = report.untrusted;
   if (!result.complete) result.untrusted = "the bag ended early: " + result.error;
   if (result.interrupted) result.untrusted = "interrupted";
   report.untrusted = result.untrusted;

@@ -116,7 +116,7 @@ std::vector<Point> System::map() const {
   return mapping_.read([](const MappingBackend& b) { return b.map(); });
 }
 
-RunReport System::report() const {
+RunReport System::report(Stamp stream_end_ns, const TrustLimits& limits) const {
   RunReport r;
   r.run.mmlio_version = kVersion;
   r.run.commit = kCommit;
@@ -156,7 +156,34 @@ RunReport System::report() const {
   r.memory.mapping_queue_capacity = mapping_.capacity();
   rusage usage{};
   if (getrusage(RUSAGE_SELF, &usage) == 0) r.memory.peak_rss_mb = usage.ru_maxrss / 1024.0;  // KiB on Linux
+  judgeTrust(&r, stream_end_ns > 0 ? stream_end_ns : odometry().lastImuNs(), limits);
   return r;
+}
+
+// Trust: the stream after initialisation is covered by poses, few of them were degraded, and the
+// IMU never carried the position alone long enough to drift far.
+void System::judgeTrust(RunReport* r, Stamp stream_end_ns, const TrustLimits& limits) const {
+  const Trajectory& poses = odometry_poses_;
+  if (poses.empty()) return;
+  const double span_s = toSec(stream_end_ns - poses.front().stamp_ns);
+  // The last sweep may end just past the stream's end (a --duration cut): never more than all of it covered.
+  r->sweeps.coverage = span_s > 0 ? std::min(1.0, toSec(poses.back().stamp_ns - poses.front().stamp_ns) / span_s) : 1.0;
+  r->sweeps.degraded_fraction =
+      static_cast<double>(r->sweeps.degraded) / static_cast<double>(std::max<std::size_t>(poses.size(), 1));
+  const double limit = limits.max_degraded_fraction;
+  char why[160] = "";
+  if (r->sweeps.degraded_fraction > limit)
+    std::snprintf(why, sizeof why, "%.0f %% of the sweeps degraded (limit %.0f %%)",
+                  100.0 * r->sweeps.degraded_fraction, 100.0 * limit);
+  else if (r->sweeps.coverage < 1.0 - limit)
+    std::snprintf(why, sizeof why, "poses cover %.0f %% of the stream after initialisation (limit %.0f %%)",
+                  100.0 * r->sweeps.coverage, 100.0 * (1.0 - limit));
+  else if (const double drift = r->degeneracy.value("max_drift_sigma_m", 0.0); drift > limits.max_drift_sigma_m)
+    std::snprintf(
+        why, sizeof why,
+        "the IMU carried the position alone long enough to drift by %.2f m (1 sigma, at %.0f s; limit %.2f m)", drift,
+        r->degeneracy.value("max_drift_at_s", 0.0), limits.max_drift_sigma_m);
+  r->untrusted = why;
 }
 
 RunReport System::writeOutputs(const std::string& dir_path, RunReport report, const std::string& gt_path) const {

@@ -27,9 +27,10 @@ inline io::RigConfig simRigConfig(const sim::Simulator& sim) {
 /// Replays the simulator's data in stamp order, as a bag stores it. `edit` may corrupt a scan (by
 /// its index among all scans fed) and `edit_imu` an IMU sample (by index) just before it is fed,
 /// after the order was decided: a corrupt header stamp does not move a message in a bag.
-inline void replay(const sim::Simulator& sim, pipeline::OnlinePipeline& pipeline,
-                   const std::function<void(int, LidarScan&)>& edit,
-                   const std::function<void(std::size_t, ImuSample&)>& edit_imu = {}) {
+/// Sink: an OnlinePipeline or a System (addImu, addScan, flush).
+template <typename Sink> void replay(const sim::Simulator& sim, Sink& pipeline,
+                                     const std::function<void(int, LidarScan&)>& edit,
+                                     const std::function<void(std::size_t, ImuSample&)>& edit_imu = {}) {
   const std::vector<ImuSample>& imu = sim.imu();
   int fed = 0;
   std::size_t i = 0;
@@ -64,7 +65,7 @@ inline void replay(const sim::Simulator& sim, pipeline::OnlinePipeline& pipeline
   pipeline.flush();
 }
 
-inline void replay(const sim::Simulator& sim, pipeline::OnlinePipeline& pipeline) { replay(sim, pipeline, {}); }
+template <typename Sink> void replay(const sim::Simulator& sim, Sink& pipeline) { replay(sim, pipeline, {}); }
 
 /// The simulated sequence as a bag at `path`, as `mmlio simulate` writes it (Livox IMU in g,
 /// Livox CustomMsg, Velodyne PointCloud2), without the IMU samples `keep_imu` refuses.

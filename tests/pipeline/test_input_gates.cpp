@@ -17,6 +17,7 @@
 #include "mmlio/io/rig_config.hpp"
 #include "mmlio/pipeline/imu_gate.hpp"
 #include "mmlio/pipeline/runner.hpp"
+#include "mmlio/pipeline/system.hpp"
 #include "sim_feed.hpp"
 
 namespace mmlio {
@@ -131,6 +132,33 @@ TEST(RunBag, AnUnwritableOutputFolderIsRefusedBeforeTheBagIsRead) {
     EXPECT_NE(std::string(e.what()).find("output directory"), std::string::npos) << e.what();
   }
   std::filesystem::remove(file);
+}
+
+// The live node's report comes from the same System: it must judge trust as `mmlio run` does.
+TEST(LiveReport, JudgesCoverageDegradationAndTrustAsARunDoes) {
+  const sim::Simulator sim = office(8.0);
+  const Stamp imu_ends = sim.startNs() + fromSec(5.0);
+  io::RigConfig cfg = testing::simRigConfig(sim);
+  cfg.mapping.loop_enabled = false;
+  System clean(cfg, "hvi");
+  testing::replay(sim, clean);
+  clean.finish();
+  const RunReport ok = clean.report();
+  EXPECT_TRUE(ok.untrusted.empty()) << ok.untrusted;
+  EXPECT_GT(ok.sweeps.coverage, 0.95);
+  EXPECT_EQ(ok.sweeps.degraded_fraction, 0.0);
+  TrustLimits strict;
+  strict.max_drift_sigma_m = 1e-6;
+  EXPECT_NE(clean.report(0, strict).untrusted.find("drift"), std::string::npos);
+
+  System stopped(cfg, "hvi");  // the IMU stops 5 s into the 8 s
+  testing::replay(sim, stopped, {}, [&](std::size_t, ImuSample& s) {
+    if (s.stamp_ns >= imu_ends) s.acc_m_s2 = Eigen::Vector3d::Constant(std::nan(""));  // dropped by the IMU gate
+  });
+  stopped.finish();
+  const RunReport bad = stopped.report();
+  EXPECT_GT(bad.sweeps.degraded_fraction, 0.25);
+  EXPECT_NE(bad.untrusted.find("sweeps degraded"), std::string::npos) << bad.untrusted;
 }
 
 }  // namespace mmlio::pipeline
@@ -369,7 +397,7 @@ TEST(RunBag, OutputsAreFlaggedUntrustedWhenTooManySweepsAreDegraded) {
   EXPECT_GT(drift, 0.0);
   EXPECT_LT(drift, 0.05);
   RunOptions strict = options;
-  strict.max_drift_sigma_m = 0.5 * drift;
+  strict.trust.max_drift_sigma_m = 0.5 * drift;
   EXPECT_NE(runBag(strict).untrusted.find("drift"), std::string::npos);
 
   // The IMU stops 5 s into the 8 s: the last sweeps are registered by the LiDARs alone.

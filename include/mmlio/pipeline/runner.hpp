@@ -27,13 +27,9 @@ struct RunOptions {
                                             // time, as ONE sequence (long-run memory and drift checks)
   const std::atomic<bool>* stop = nullptr;  // set (e.g. by a signal handler): stop reading, write
                                             // what was computed, status "interrupted"
-  double max_degraded_fraction = 0.25;      // more degraded sweeps than this, or a trajectory covering
-                                            // less than 1 - this of the stream after initialisation:
-                                            // RunResult::untrusted says why
+  TrustLimits trust;                        // beyond them RunResult::untrusted says why
   System::TimingObserver on_sweep;          // every tracked sweep's stamp and stage times, on the reading
                                             // thread (bench records its time-and-memory curve)
-  double max_drift_sigma_m = 0.3;           // ... or, somewhere, the position's uncertainty along what the
-                                   // LiDARs had not observed for a while above this (degeneracy.max_drift_sigma_m)
 };
 
 struct RunResult {

@@ -21,6 +21,14 @@
 
 namespace mmlio::pipeline {
 
+/// When outputs are not to be trusted (RunReport::untrusted says why).
+struct TrustLimits {
+  double max_degraded_fraction = 0.25;  // more degraded sweeps than this, or poses covering less than
+                                        // 1 - this of the stream after initialisation
+  double max_drift_sigma_m = 0.3;       // ... or the position's uncertainty along what the LiDARs had not
+                                        // observed for a while above this (degeneracy.max_drift_sigma_m)
+};
+
 class System {
  public:
   /// Every sweep after IMU initialisation, as soon as it is tracked (the node publishes from it).
@@ -56,8 +64,10 @@ class System {
   std::size_t loops() const;
   /// The map at the corrected poses (the back end pauses while it is assembled).
   std::vector<Point> map() const;
-  /// The run so far; the feeder adds what it knows of its input (source, decoding, drops).
-  RunReport report() const;
+  /// The run so far; the feeder adds what it knows of its input (source, decoding, drops). Coverage,
+  /// degraded fraction and trust are judged against a stream that ran to stream_end_ns (the bag's
+  /// end, or the last message a live node received; 0: the last IMU sample processed).
+  RunReport report(Stamp stream_end_ns = 0, const TrustLimits& limits = {}) const;
   /// trajectory.tum (corrected; + KITTI if configured), trajectory_odometry.tum, map.pcd, per-LiDAR and dynamic maps,
   /// report.json, report.md and figures into dir (created); returns the report as written. The files are replaced
   /// atomically, so a live save never leaves a half-written one.
@@ -70,6 +80,7 @@ class System {
 
  private:
   void onSweep(estimator::SweepResult r);
+  void judgeTrust(RunReport* report, Stamp stream_end_ns, const TrustLimits& limits) const;
   /// Estimator stamps back in the input's time (they differ after a time-base jump).
   Trajectory inputTime(Trajectory trajectory) const;
 
