@@ -439,7 +439,9 @@ TEST(InputGates, ALossOfAllDataWhileTheRigAcceleratesOutOfATurnIsBridged) {
   std::printf("office 20 s: clean ATE %.4f m; 0.2 s of all data lost at 10 s: %.4f m, %zu degraded sweeps\n", clean_ate,
               lost_ate, degraded);
   EXPECT_GE(degraded, 1u);
-  EXPECT_LT(lost_ate, 2.0 * clean_ate) << "clean " << clean_ate;
+  // The gap's cost in ATE, absolute: a ratio to the clean run moves with whatever else changes the
+  // clean run. De-skewed by the turn from before the gap this costs +4 cm; bridged, under +1 cm.
+  EXPECT_LT(lost_ate, clean_ate + 0.01) << "clean " << clean_ate;
 }
 
 TEST(InputGates, ALossOfAllDataWhileATurnEndsIsBridgedByTryingSeveralTurns) {
