@@ -20,8 +20,8 @@ mkdir -p "$work"
 page="$work/run/report.html"
 flags=(--headless=new --no-sandbox --use-angle=swiftshader --enable-unsafe-swiftshader --window-size=1280,1600
        --virtual-time-budget=10000 --user-data-dir="$work/profile")
-timeout 120 "$browser" "${flags[@]}" --dump-dom "file://$page" > "$work/dom.html" 2> "$work/browser.log"
-timeout 120 "$browser" "${flags[@]}" --screenshot="$work/shot.png" "file://$page" >> "$work/browser.log" 2>&1
+timeout 300 "$browser" "${flags[@]}" --dump-dom "file://$page" > "$work/dom.html" 2> "$work/browser.log"
+timeout 300 "$browser" "${flags[@]}" --screenshot="$work/shot.png" "file://$page" >> "$work/browser.log" 2>&1
 
 python3 - "$work" <<'PY'
 import json, os, re, struct, sys, zlib

@@ -26,9 +26,12 @@
     for (let c = 0; c < 3; ++c) out[k + c] = (stops[i][c] + f * (stops[i + 1][c] - stops[i][c])) / 255;
   }
   const colors = new Float32Array(meta.points * 3);
+  let colourMode = 'height', top = Math.min(meta.z_high, meta.cut_z);
+  // Heights span the floor to the cut: what is shown uses the whole colour map.
   function colourBy(mode) {
+    colourMode = mode;
     for (let i = 0; i < meta.points; ++i) {
-      const t = mode === 'height' ? (mapXyz[3 * i + 2] - meta.z_low) / Math.max(1e-3, meta.z_high - meta.z_low)
+      const t = mode === 'height' ? (mapXyz[3 * i + 2] - meta.z_low) / Math.max(1e-3, top - meta.z_low)
                                   : intensity[i] / 255;
       viridis(t, colors, 3 * i);
     }
@@ -106,6 +109,11 @@
   cutInput.value = meta.cut_z;
   cutInput.addEventListener('input', function (e) {
     cut.constant = Number(e.target.value);
+    top = Math.min(meta.z_high, cut.constant);
+    if (colourMode === 'height') {
+      colourBy('height');
+      colorAttribute.needsUpdate = true;
+    }
     render();
   });
   root.querySelectorAll('input[data-layer]').forEach(function (box) {
