@@ -138,9 +138,17 @@ command -v parallel >/dev/null || { echo "accuracy.sh needs GNU parallel (Debian
 command -v bc >/dev/null || { echo "accuracy.sh needs bc (Debian: apt-get install bc)" >&2; exit 1; }
 MMLIO="${MMLIO:-build/mmlio}"
 [ -x "$MMLIO" ] || scripts/build.sh --target mmlio
+# Two matrices in one folder would write and delete each other's bags.
+if [ -e "$OUT/results.jsonl" ]; then
+  echo "accuracy.sh: $OUT already holds a matrix (results.jsonl); give another folder or remove it" >&2
+  exit 1
+fi
 mkdir -p "$OUT"
+# Stopped (Ctrl-C, kill), the running cells stop too: GNU parallel would go on with them otherwise.
+trap 'trap - INT TERM; pkill -TERM -P $$; wait; exit 130' INT TERM
 USER_KEEPS_MAPS="${KEEP_MAPS:-0}"
 [ "$PEOPLE" = 0 ] || export KEEP_MAPS=1  # score_static_kept compares the maps with and without people
-jobs "$OUT" | parallel --will-cite -j "$JOBS" --line-buffer > "$OUT/results.jsonl"
+jobs "$OUT" | parallel --will-cite -j "$JOBS" --line-buffer > "$OUT/results.jsonl" &
+wait $!  # in the background, so that the trap above runs as soon as a signal comes
 [ "$PEOPLE" = 0 ] || score_static_kept "$OUT"
 summarise "$OUT"
