@@ -158,7 +158,7 @@ void runEvaluate(const EvaluateArgs& args) {
   const Trajectory est = readNonEmptyTum(args.est_path, "estimated");
   const eval::EvalResult result = eval::evaluate(gt, est, options);
   if (!args.plot_path.empty()) {
-    const bool html = args.plot_path.size() >= 5 && args.plot_path.compare(args.plot_path.size() - 5, 5, ".html") == 0;
+    const bool html = std::filesystem::path(args.plot_path).extension() == ".html";
     io::writeFileAtomically(args.plot_path, [&](std::ostream& os) { os << eval::evaluationFigure(result, html); });
   }
 

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 #include "mmlio/eval/svg_plot.hpp"
 
@@ -12,13 +11,6 @@ namespace {
 constexpr int kWidthPx = 900;
 constexpr int kTopViewHeightPx = 640;
 constexpr int kErrorHeightPx = 320;
-
-std::string format(const char* pattern, double value) {
-  if (!std::isfinite(value)) return "n/a";
-  char text[64];
-  std::snprintf(text, sizeof(text), pattern, value);
-  return text;
-}
 
 std::vector<Eigen::Vector2d> topView(const std::vector<Eigen::Vector3d>& xyz) {
   std::vector<Eigen::Vector2d> xy;
@@ -32,8 +24,8 @@ std::vector<Eigen::Vector2d> topView(const std::vector<Eigen::Vector3d>& xyz) {
 std::string topViewSvg(const EvalResult& r) {
   SvgPlot::Config c;
   c.id = "eval-top";
-  c.title = "Top view: ATE RMSE " + format("%.2f", 100.0 * r.ate_rmse_m) + " cm, RPE " + format("%.2f", r.rpe_10m_pct) +
-            " % / " + format("%.4f", r.rpe_10m_deg_per_m) + " deg/m";
+  c.title = "Top view: ATE RMSE " + fixedText(100.0 * r.ate_rmse_m, 2) + " cm, RPE " + fixedText(r.rpe_10m_pct, 2) +
+            " % / " + fixedText(r.rpe_10m_deg_per_m, 4) + " deg/m";
   c.x_label = "x [m]";
   c.y_label = "y [m]";
   c.width_px = kWidthPx, c.height_px = kTopViewHeightPx;
@@ -48,8 +40,8 @@ std::string topViewSvg(const EvalResult& r) {
 std::string errorOverTimeSvg(const EvalResult& r) {
   SvgPlot::Config c;
   c.id = "eval-error";
-  c.title = "Position error after alignment: coverage " + format("%.1f", 100.0 * r.coverage) + " %, end to end " +
-            format("%.1f", 100.0 * r.end_to_end_m) + " cm";
+  c.title = "Position error after alignment: coverage " + fixedText(100.0 * r.coverage, 1) + " %, end to end " +
+            fixedText(100.0 * r.end_to_end_m, 1) + " cm";
   c.x_label = "time since the ground truth's start [s]";
   c.y_label = "error [cm]";
   c.width_px = kWidthPx, c.height_px = kErrorHeightPx;
@@ -76,7 +68,7 @@ std::string evaluationFigure(const EvalResult& r, bool html) {
            "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; style-src 'unsafe-inline'\">"
            "<style>body{font-family:system-ui,sans-serif;margin:20px;color:#1d2127}</style></head><body>\n"
            "<h1>ATE " +
-           format("%.2f", 100.0 * r.ate_rmse_m) + " cm over " + format("%.1f", r.path_length_m) + " m</h1>\n" + top +
+           fixedText(100.0 * r.ate_rmse_m, 2) + " cm over " + fixedText(r.path_length_m, 1) + " m</h1>\n" + top +
            error + "</body></html>\n";
   // One SVG holding both, the error plot below the top view.
   return "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + std::to_string(kWidthPx) + "\" height=\"" +

@@ -12,11 +12,7 @@ namespace {
 constexpr int kMaxLineVertices = 4000;
 constexpr double kLeft = 62, kRight = 16, kTop = 34, kBottom = 46;  // axes margins, px
 
-std::string num(double v, int decimals = 1) {
-  char text[48];
-  std::snprintf(text, sizeof(text), "%.*f", decimals, v);
-  return text;
-}
+std::string num(double v, int decimals = 1) { return fixedText(v, decimals); }
 
 // Tick labels with as many decimals as the step needs.
 std::string tickLabel(double v, double step) {
@@ -48,6 +44,13 @@ std::vector<double> niceTicks(double lo, double hi, int target) {
   std::vector<double> ticks;
   for (double t = std::ceil(lo / step - 1e-9) * step; t <= hi + step * 1e-9; t += step) ticks.push_back(t);
   return ticks;
+}
+
+std::string fixedText(double value, int decimals) {
+  if (!std::isfinite(value)) return "n/a";
+  char text[48];
+  std::snprintf(text, sizeof(text), "%.*f", decimals, value);
+  return text;
 }
 
 std::string xmlEscape(const std::string& text) {

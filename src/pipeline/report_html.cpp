@@ -15,13 +15,7 @@ namespace mmlio::pipeline {
 namespace {
 
 using eval::xmlEscape;
-
-std::string fixed(double v, int decimals) {
-  if (!std::isfinite(v)) return "n/a";
-  char text[48];
-  std::snprintf(text, sizeof(text), "%.*f", decimals, v);
-  return text;
-}
+const auto fixed = eval::fixedText;
 
 double pathLength(const Trajectory& trajectory) {
   double length = 0.0;

@@ -1,6 +1,7 @@
 #include "mmlio/pipeline/run_report.hpp"
 
-#include <cstdio>
+#include "mmlio/eval/svg_plot.hpp"
+
 #include <vector>
 
 namespace mmlio::pipeline {
@@ -158,11 +159,7 @@ Json toJson(const RunReport& r) {
 }
 
 std::string toMarkdown(const RunReport& r) {
-  const auto fixed = [](double v, int decimals) {
-    char text[48];
-    std::snprintf(text, sizeof(text), "%.*f", decimals, v);
-    return std::string(text);
-  };
+  const auto fixed = eval::fixedText;
   std::string md = "# mmlio run: " + (r.input.source.empty() ? std::string("live") : r.input.source) + "\n\n";
   md += "**" + r.status + "**, " + (r.untrusted.empty() ? "trusted" : "**untrusted**: " + r.untrusted) + "\n\n";
   md += "| | |\n|---|---|\n";

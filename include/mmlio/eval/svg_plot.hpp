@@ -79,4 +79,7 @@ struct BarChart {
 /// Escapes &, <, >, " and ' for XML/HTML text and attributes.
 std::string xmlEscape(const std::string& text);
 
+/// `value` with `decimals` digits after the point ("0.72"), "n/a" when it is not finite.
+std::string fixedText(double value, int decimals);
+
 }  // namespace mmlio::eval
