@@ -183,7 +183,7 @@ std::string SvgPlot::render() const {
       const std::string side = num(s.size_px);
       for (const Eigen::Vector2d& p : s.xy)
         if (p.allFinite())
-          os << 'M' << num(px(p.x())) << ' ' << num(py(p.y())) << 'h' << side << 'v' << side << 'h-' << side << 'z';
+          os << 'M' << num(px(p.x())) << ' ' << num(py(p.y())) << 'h' << side << 'v' << side << "h-" << side << 'z';
       os << "\"/>\n";
     } else if (s.kind == Kind::kMarker) {
       os << "<circle cx=\"" << num(px(s.xy[0].x())) << "\" cy=\"" << num(py(s.xy[0].y())) << "\" r=\"" << s.size_px

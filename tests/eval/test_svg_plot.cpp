@@ -47,6 +47,16 @@ TEST(SvgPlot, EqualAspectKeepsMetresSquare) {
   EXPECT_NEAR(dy, 300.0, 0.2);
 }
 
+TEST(SvgPlot, DotsAreSmallSquaresInOnePath) {
+  SvgPlot::Config c;
+  c.width_px = 400, c.height_px = 300;
+  SvgPlot plot(c);
+  plot.xRange(0, 10);
+  plot.yRange(0, 10);
+  plot.dots({{0, 0}, {10, 10}}, "#999", 1.5);
+  EXPECT_NE(plot.render().find("d=\"M62.0 254.0h1.5v1.5h-1.5zM384.0 34.0h1.5v1.5h-1.5z\""), std::string::npos);
+}
+
 TEST(SvgPlot, TextIsEscaped) {
   SvgPlot::Config c;
   c.title = "a < b & \"c\"";
