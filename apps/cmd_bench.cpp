@@ -15,8 +15,8 @@
 #include "commands.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/timer.hpp"
-#include "mmlio/io/calib_file.hpp"
-#include "mmlio/io/rig_config.hpp"
+#include "mmlio/config/calib_file.hpp"
+#include "mmlio/config/rig_config.hpp"
 #include "mmlio/pipeline/runner.hpp"
 
 namespace mmlio::apps {
@@ -84,8 +84,8 @@ double cpuSeconds() {  // user + system time of every thread of this process so 
 void bench(const BenchArgs& a) {
   pipeline::RunOptions options;
   options.bag_path = a.bag;
-  if (!a.config.empty()) options.config = io::loadRigConfig(a.config);
-  if (!a.calib.empty()) io::applyCalibration(options.config, io::readCalibration(a.calib));
+  if (!a.config.empty()) options.config = config::loadRigConfig(a.config);
+  if (!a.calib.empty()) config::applyCalibration(options.config, config::readCalibration(a.calib));
   options.mode = a.mode;
   options.progress = false;
   options.replays = a.replays;

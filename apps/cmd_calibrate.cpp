@@ -6,8 +6,8 @@
 
 #include "commands.hpp"
 #include "mmlio/core/log.hpp"
-#include "mmlio/io/calib_file.hpp"
-#include "mmlio/io/rig_config.hpp"
+#include "mmlio/config/calib_file.hpp"
+#include "mmlio/config/rig_config.hpp"
 #include "mmlio/pipeline/bag_calibration.hpp"
 
 namespace mmlio::apps {
@@ -20,16 +20,16 @@ struct CalibrateArgs {
 };
 
 void calibrate(const CalibrateArgs& a) {
-  io::RigConfig cfg;
+  config::RigConfig cfg;
   if (a.config.empty())
     log::emit(log::Level::kInfo, "no --config: using the built-in defaults (same as config/hvi.yaml)");
   else
-    cfg = io::loadRigConfig(a.config);
+    cfg = config::loadRigConfig(a.config);
   pipeline::BagCalibrationOptions opt;
   opt.solid_frames = a.frames;
   opt.estimate_time_offset = !a.no_time_offset;
   const pipeline::BagCalibrationResult r = pipeline::calibrateBag(a.bag, cfg, opt);
-  io::writeCalibration(a.out, r.calibration, r.extra);
+  config::writeCalibration(a.out, r.calibration, r.extra);
   printCalibration(r);
   std::printf("written: %s\n", a.out.c_str());
 }

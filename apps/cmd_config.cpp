@@ -5,7 +5,7 @@
 
 #include "commands.hpp"
 #include "mmlio/core/error.hpp"
-#include "mmlio/io/rig_config.hpp"
+#include "mmlio/config/rig_config.hpp"
 
 namespace mmlio::apps {
 namespace {
@@ -19,11 +19,11 @@ void config(const ConfigArgs& a) {
   if (a.dump_defaults == !a.file.empty())
     throw Error("give either --dump-defaults or a rig config file to check (mmlio config --help)");
   if (a.dump_defaults) {
-    std::cout << io::defaultConfigYaml();
+    std::cout << config::defaultConfigYaml();
     return;
   }
-  const io::RigConfig cfg = io::loadRigConfig(a.file);  // throws with file, line and key on a mistake
-  std::cout << "# " << a.file << " as mmlio runs it: every key, defaults filled in\n" << io::toYaml(cfg);
+  const config::RigConfig cfg = config::loadRigConfig(a.file);  // throws with file, line and key on a mistake
+  std::cout << "# " << a.file << " as mmlio runs it: every key, defaults filled in\n" << config::toYaml(cfg);
 }
 
 }  // namespace

@@ -10,8 +10,9 @@
 #include "commands.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
-#include "mmlio/io/calib_file.hpp"
-#include "mmlio/io/rig_config.hpp"
+#include "mmlio/config/calib_file.hpp"
+#include "mmlio/config/calibration_source.hpp"
+#include "mmlio/config/rig_config.hpp"
 #include "mmlio/pipeline/bag_calibration.hpp"
 #include "mmlio/pipeline/runner.hpp"
 
@@ -33,28 +34,16 @@ constexpr int kExitUntrusted = 3;
 
 /// Applies `calibration:` from the config or --calib (which wins). `auto` calibrates on the bag's
 /// start and writes the result to OUT/calib.yaml.
-void applyCalibrationSource(io::RigConfig& cfg, const std::string& calib_override, const std::string& bag,
+void applyCalibrationSource(config::RigConfig& cfg, const std::string& calib_override, const std::string& bag,
                             const std::string& out_dir) {
-  std::string source = calib_override.empty() ? cfg.calibration : calib_override;
-  if (source == "config") return;
-  if (source == "auto") {
-    const pipeline::BagCalibrationResult r = pipeline::calibrateBag(bag, cfg);
-    io::applyCalibration(cfg, r.calibration);
-    std::filesystem::create_directories(out_dir);
-    io::writeCalibration(out_dir + "/calib.yaml", r.calibration, r.extra);
-    cfg.calibration = "auto (" + out_dir + "/calib.yaml)";  // what the report records
-    printCalibration(r);
-    std::printf("written: %s/calib.yaml\n", out_dir.c_str());
-    return;
-  }
-  const io::Calibration calibration = io::readCalibration(source);
-  const auto uncovered = io::applyCalibration(cfg, calibration);
-  for (const auto& name : uncovered) {
-    log::emit(log::Level::kWarn, "calibration ", source, " has no entry for LiDAR '", name,
-              "': keeping its extrinsic from the config");
-  }
-  cfg.calibration = source;
-  log::emit(log::Level::kInfo, "extrinsics and clock offsets from ", source);
+  if (config::resolveCalibration(cfg, calib_override) != "auto") return;
+  const pipeline::BagCalibrationResult r = pipeline::calibrateBag(bag, cfg);
+  config::applyCalibration(cfg, r.calibration);
+  std::filesystem::create_directories(out_dir);
+  config::writeCalibration(out_dir + "/calib.yaml", r.calibration, r.extra);
+  cfg.calibration = "auto (" + out_dir + "/calib.yaml)";  // what the report records
+  printCalibration(r);
+  std::printf("written: %s/calib.yaml\n", out_dir.c_str());
 }
 
 std::atomic<bool> g_stop{false};
@@ -65,17 +54,17 @@ extern "C" void onStopSignal(int signal) {
 }
 
 void run(const RunArgs& a) {
-  io::RigConfig cfg;
+  config::RigConfig cfg;
   if (a.config.empty()) {
     log::emit(log::Level::kInfo, "no --config: using the built-in defaults (same as config/hvi.yaml)");
   } else {
-    cfg = io::loadRigConfig(a.config);
+    cfg = config::loadRigConfig(a.config);
   }
   if (a.no_loop) cfg.mapping.loop_enabled = false;
   applyCalibrationSource(cfg, a.calib, a.bag, a.out);
   const std::string mode = a.mode.empty() ? cfg.mode : a.mode;
-  if (io::isValidMode(mode))
-    for (const std::string& name : io::placeholderExtrinsics(cfg, mode))
+  if (config::isValidMode(mode))
+    for (const std::string& name : config::placeholderExtrinsics(cfg, mode))
       log::warn("LiDAR '", name, "' is on the presets' placeholder mount (0.2 m above the IMU, axes aligned): ",
                 "a real mount's offset from it becomes an error of every sweep; ",
                 "calibrate it (mmlio calibrate, or --calib auto) or give the rig drawing's extrinsic");

@@ -13,7 +13,7 @@
 #include "mmlio/core/log.hpp"
 #include "mmlio/core/timer.hpp"
 #include "mmlio/io/bag_writer.hpp"
-#include "mmlio/io/calib_file.hpp"
+#include "mmlio/config/calib_file.hpp"
 #include "mmlio/io/trajectory_writer.hpp"
 #include "mmlio/pipeline/progress.hpp"
 #include "mmlio/sim/simulator.hpp"
@@ -43,9 +43,9 @@ YAML::Node vec3(const Eigen::Vector3d& v) {
 }
 
 void writeTruth(const std::string& path, const sim::Simulator& sim, const SimulateArgs& args) {
-  io::Calibration calib;
+  config::Calibration calib;
   for (const LidarExtrinsic& e : {sim.velodyneExtrinsic(), sim.livoxExtrinsic()})
-    calib[e.name] = io::SensorCalibration{e.T_imu_sensor, e.time_offset_s};
+    calib[e.name] = config::SensorCalibration{e.T_imu_sensor, e.time_offset_s};
   YAML::Node extra;
   extra["velodyne"]["topic"] = "/velodyne_points";
   extra["velodyne"]["kind"] = "spinning";
@@ -75,7 +75,7 @@ void writeTruth(const std::string& path, const sim::Simulator& sim, const Simula
   extra["path_length_m"] = sim.pathLengthM();
   extra["start_stamp_ns"] = sim.startNs();
   extra["generated_by"] = "mmlio simulate";
-  io::writeCalibration(path, calib, extra);
+  config::writeCalibration(path, calib, extra);
 }
 
 void runSimulate(const SimulateArgs& args) {

@@ -25,10 +25,10 @@
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
 #include "mmlio/core/so3.hpp"
-#include "mmlio/io/calib_file.hpp"
+#include "mmlio/config/calibration_source.hpp"
 #include "mmlio/io/cloud_decoders.hpp"
 #include "mmlio/io/livox_msg.hpp"
-#include "mmlio/io/rig_config.hpp"
+#include "mmlio/config/rig_config.hpp"
 #include "mmlio/pipeline/system.hpp"
 #include "ros_messages.hpp"
 
@@ -84,20 +84,14 @@ NodeParams readParams(const ros::NodeHandle& pnh) {
 }
 
 /// The config, with `calibration:` (or ~calib, which wins) applied, as `mmlio run` does.
-io::RigConfig loadConfig(const NodeParams& p) {
-  io::RigConfig cfg;
+config::RigConfig loadConfig(const NodeParams& p) {
+  config::RigConfig cfg;
   if (p.config.empty())
     log::info("no ~config: using the built-in defaults (same as config/hvi.yaml)");
   else
-    cfg = io::loadRigConfig(p.config);
-  const std::string source = p.calib.empty() ? cfg.calibration : p.calib;
-  if (source == "auto") throw Error("calibration: auto is not available live; run `mmlio calibrate` and set ~calib");
-  if (source != "config") {
-    for (const auto& name : io::applyCalibration(cfg, io::readCalibration(source))) {
-      log::warn("calibration ", source, " has no entry for LiDAR '", name, "': keeping its extrinsic from the config");
-    }
-    log::info("extrinsics and clock offsets from ", source);
-  }
+    cfg = config::loadRigConfig(p.config);
+  if (config::resolveCalibration(cfg, p.calib) == "auto")
+    throw Error("calibration: auto is not available live; run `mmlio calibrate` and set ~calib");
   return cfg;
 }
 
@@ -125,7 +119,7 @@ std::string advertisedType(const std::string& topic) {
 
 class Node {
  public:
-  Node(ros::NodeHandle& nh, ros::NodeHandle& pnh, NodeParams params, const io::RigConfig& cfg)
+  Node(ros::NodeHandle& nh, ros::NodeHandle& pnh, NodeParams params, const config::RigConfig& cfg)
       : params_(std::move(params)),
         queue_(
             {static_cast<std::size_t>(params_.max_queued_imu), static_cast<std::size_t>(params_.max_queued_scans), 8}),
@@ -149,7 +143,7 @@ class Node {
         },
         ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
     log::info("mode ", system_.mode(), ", IMU ", cfg.imu.topic, " (sensor_msgs/Imu, acc unit ", cfg.imu.acc_unit, ")");
-    for (const io::LidarConfig* l : io::activeLidars(cfg, system_.mode())) subscribeLidar(nh, *l);
+    for (const config::LidarConfig* l : config::activeLidars(cfg, system_.mode())) subscribeLidar(nh, *l);
     worker_ = std::thread([this] { run(); });
   }
 
@@ -172,7 +166,7 @@ class Node {
   }
 
  private:
-  void subscribeLidar(ros::NodeHandle& nh, const io::LidarConfig& l) {
+  void subscribeLidar(ros::NodeHandle& nh, const config::LidarConfig& l) {
     const std::size_t index = decode_.size();
     io::CloudDecodeOptions d;
     d.sensor = l.name;
@@ -430,7 +424,7 @@ int main(int argc, char** argv) {
   try {
     ros::NodeHandle nh, pnh("~");
     const NodeParams params = readParams(pnh);
-    const mmlio::io::RigConfig cfg = loadConfig(params);
+    const mmlio::config::RigConfig cfg = loadConfig(params);
     Node node(nh, pnh, params, cfg);
     ros::spin();  // until SIGINT / rosnode kill
     node.finish();

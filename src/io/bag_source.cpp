@@ -81,23 +81,6 @@ struct Ros2Msg {
 
 }  // namespace
 
-BagSourceOptions bagSourceOptions(const RigConfig& cfg, const std::string& mode) {
-  BagSourceOptions o;
-  o.imu_topic = cfg.imu.topic;
-  o.acc_unit = cfg.imu.acc_unit;
-  for (const LidarConfig* l : activeLidars(cfg, mode)) {
-    SourceLidar s;
-    s.name = l->name;
-    s.topic = l->topic;
-    s.kind = l->kind();
-    s.min_range_m = l->min_range_m;
-    s.max_range_m = l->max_range_m;
-    s.num_rings = l->num_rings;
-    o.lidars.push_back(s);
-  }
-  return o;
-}
-
 struct BagSource::Impl {
   /// What one streamed topic is and how to decode it.
   struct Stream {

@@ -1,4 +1,5 @@
 #include "mmlio/pipeline/bag_calibration.hpp"
+#include "mmlio/config/source_options.hpp"
 
 #include <cmath>
 #include <deque>
@@ -46,11 +47,11 @@ bool turningNear(const std::vector<ImuSample>& imu, Stamp sweep_start, double ma
 
 }  // namespace
 
-BagCalibrationResult calibrateBag(const std::string& bag_path, const io::RigConfig& cfg_in,
+BagCalibrationResult calibrateBag(const std::string& bag_path, const config::RigConfig& cfg_in,
                                   const BagCalibrationOptions& opt) {
   BagCalibrationResult res;
-  const io::LidarConfig *spinning = nullptr, *solid = nullptr;
-  for (const io::LidarConfig& l : cfg_in.lidars) {
+  const config::LidarConfig *spinning = nullptr, *solid = nullptr;
+  for (const config::LidarConfig& l : cfg_in.lidars) {
     if (l.kind() == LidarKind::kSpinning && !spinning) spinning = &l;
     if (l.kind() == LidarKind::kSolidState && !solid) solid = &l;
   }
@@ -62,7 +63,7 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const io::RigConf
   res.solid = solid->name;
 
   // ---- read the start of the bag: IMU, the stationary LiDAR data, sweeps for the clock offset ----
-  io::BagSource source(bag_path, io::bagSourceOptions(cfg_in, "hvi"));
+  io::BagSource source(bag_path, config::bagSourceOptions(cfg_in, "hvi"));
   Collected c;
   c.start_ns = source.beginNs();
   const double rest_s = 0.1 * std::max(opt.solid_frames, opt.spinning_sweeps) + 0.05;
@@ -172,7 +173,7 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const io::RigConf
     }
   }
 
-  io::SensorCalibration sc_spin{T_imu_spinning, offset_s}, sc_solid{solid->T_imu_sensor, solid->time_offset_s};
+  config::SensorCalibration sc_spin{T_imu_spinning, offset_s}, sc_solid{solid->T_imu_sensor, solid->time_offset_s};
   res.calibration[spinning->name] = sc_spin;
   res.calibration[solid->name] = sc_solid;
 

@@ -2,11 +2,11 @@
 
 namespace mmlio::pipeline {
 
-std::vector<estimator::LidarSetup> lidarSetups(const io::RigConfig& cfg, const std::string& mode) {
+std::vector<estimator::LidarSetup> lidarSetups(const config::RigConfig& cfg, const std::string& mode) {
   std::vector<estimator::LidarSetup> out;
-  for (const io::LidarConfig* lidar : io::activeLidars(cfg, mode)) {
+  for (const config::LidarConfig* lidar : config::activeLidars(cfg, mode)) {
     estimator::LidarSetup s;
-    s.extrinsic = io::toExtrinsic(*lidar);
+    s.extrinsic = config::toExtrinsic(*lidar);
     s.num_rings = lidar->num_rings;
     out.push_back(s);
   }

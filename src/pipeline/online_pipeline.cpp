@@ -17,15 +17,15 @@ constexpr double kScanRunSpacingS = 1.0;     // ... each within this of the one 
 constexpr double kTimeBaseJumpS = 1.0;       // the IMU resuming this much later, every LiDAR alike ...
 constexpr double kTimeBaseAgreementS = 0.3;  // ... within this: the stream's time base jumped
 
-lidar::SweepAligner::Config alignerConfig(const io::RigConfig& cfg, const std::string& mode) {
+lidar::SweepAligner::Config alignerConfig(const config::RigConfig& cfg, const std::string& mode) {
   lidar::SweepAligner::Config c;
-  c.reference = io::referenceLidar(cfg, mode).name;
+  c.reference = config::referenceLidar(cfg, mode).name;
   return c;
 }
 
 }  // namespace
 
-OnlinePipeline::OnlinePipeline(const io::RigConfig& cfg, const std::string& mode, SweepCallback on_sweep)
+OnlinePipeline::OnlinePipeline(const config::RigConfig& cfg, const std::string& mode, SweepCallback on_sweep)
     : aligner_(alignerConfig(cfg, mode)),
       odometry_(cfg.estimator, lidarSetups(cfg, mode)),
       on_sweep_(std::move(on_sweep)) {

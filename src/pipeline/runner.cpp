@@ -1,4 +1,5 @@
 #include "mmlio/pipeline/runner.hpp"
+#include "mmlio/config/source_options.hpp"
 
 #include <cstdio>
 #include <limits>
@@ -68,13 +69,13 @@ class CreatedFolder {
 }  // namespace
 
 RunResult runBag(const RunOptions& options) {
-  const io::RigConfig& cfg = options.config;
+  const config::RigConfig& cfg = options.config;
   CreatedFolder out_folder(options.out_dir,
                            options.out_dir.empty() ? std::filesystem::path() : checkWritable(options.out_dir));
   const std::string mode = options.mode.empty() ? cfg.mode : options.mode;
-  if (!io::isValidMode(mode)) throw Error("unknown mode '" + mode + "' (expected hvi, vi or hi)");
+  if (!config::isValidMode(mode)) throw Error("unknown mode '" + mode + "' (expected hvi, vi or hi)");
 
-  io::BagSource source(options.bag_path, io::bagSourceOptions(cfg, mode));
+  io::BagSource source(options.bag_path, config::bagSourceOptions(cfg, mode));
   System system(cfg, mode);
   system.setTimingObserver(options.on_sweep);
   const estimator::Odometry& odometry = system.odometry();
@@ -92,7 +93,7 @@ RunResult runBag(const RunOptions& options) {
     for (int replay = 0; replay < std::max(1, options.replays); ++replay) {
       // Replays re-open the bag and shift its stamps past the previous pass.
       std::unique_ptr<io::BagSource> again;
-      if (replay > 0) again = std::make_unique<io::BagSource>(options.bag_path, io::bagSourceOptions(cfg, mode));
+      if (replay > 0) again = std::make_unique<io::BagSource>(options.bag_path, config::bagSourceOptions(cfg, mode));
       io::BagSource& src = replay > 0 ? *again : source;
       const Stamp shift = replay * period_ns;
       while (!(options.stop && options.stop->load()) && src.next(&event)) {

@@ -13,7 +13,7 @@
 
 namespace mmlio::pipeline {
 
-System::System(const io::RigConfig& cfg, const std::string& mode, SweepObserver observer)
+System::System(const config::RigConfig& cfg, const std::string& mode, SweepObserver observer)
     : cfg_(cfg),
       mode_(mode.empty() ? cfg.mode : mode),
       observer_(std::move(observer)),
@@ -22,10 +22,10 @@ System::System(const io::RigConfig& cfg, const std::string& mode, SweepObserver 
       online_(cfg, mode_, [this](estimator::SweepResult r) { onSweep(std::move(r)); }) {
   dynamic_.enabled = cfg.estimator.dynamic.enabled;
   dynamic_.clean_map = cfg.mapping.clean_map;
-  io::RigConfig effective = cfg_;  // as run: the mode chosen, the extrinsics already applied
+  config::RigConfig effective = cfg_;  // as run: the mode chosen, the extrinsics already applied
   effective.mode = mode_;
   effective.calibration = "config";
-  effective_config_yaml_ = io::toYaml(effective);  // once: every report (the node's too) carries it
+  effective_config_yaml_ = config::toYaml(effective);  // once: every report (the node's too) carries it
 }
 
 void System::onSweep(estimator::SweepResult r) {

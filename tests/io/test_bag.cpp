@@ -16,7 +16,7 @@
 #include "mmlio/io/bag_info.hpp"
 #include "mmlio/io/bag_source.hpp"
 #include "mmlio/io/bag_writer.hpp"
-#include "error_of.hpp"
+#include "../common/error_of.hpp"
 
 namespace mmlio::io {
 namespace {
@@ -242,20 +242,20 @@ TEST(BagSource, ADamagedCloudAfterGoodOnesIsSkippedAndCountedAndReadingGoesOn) {
 
 TEST(BagSourceErrors, MissingFileNotABagAndTruncatedBagAreOneLineErrors) {
   const std::string missing = tempPath("nope.bag");
-  std::string msg = errorOf([&] { BagSource(missing, rigOptions()); });
+  std::string msg = mmlio::testing::errorOf([&] { BagSource(missing, rigOptions()); });
   EXPECT_NE(msg.find("not found"), std::string::npos) << msg;
   EXPECT_NE(msg.find(missing), std::string::npos) << msg;
 
   const std::string text = tempPath("text.bag");
   std::ofstream(text) << "hello, not a bag\n";
-  msg = errorOf([&] { BagSource(text, rigOptions()); });
+  msg = mmlio::testing::errorOf([&] { BagSource(text, rigOptions()); });
   EXPECT_NE(msg.find("is not a bag"), std::string::npos) << msg;
 
   const std::string full = writeRigBag();
   const std::string cut = tempPath("cut.bag");
   fs::copy_file(full, cut, fs::copy_options::overwrite_existing);
   fs::resize_file(cut, 4200);  // inside the first chunk: no complete message
-  msg = errorOf([&] { BagSource(cut, rigOptions()); });
+  msg = mmlio::testing::errorOf([&] { BagSource(cut, rigOptions()); });
   EXPECT_NE(msg.find("rosbag reindex"), std::string::npos) << msg;
   EXPECT_NE(msg.find(cut), std::string::npos) << msg;
   EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
@@ -359,7 +359,7 @@ TEST(BagSourceErrors, MissingTopicIsNamedWithTheBagsTopics) {
   const std::string path = writeRigBag();
   BagSourceOptions o = rigOptions();
   o.lidars[0].topic = "/points_raw";
-  const std::string msg = errorOf([&] { BagSource(path, o); });
+  const std::string msg = mmlio::testing::errorOf([&] { BagSource(path, o); });
   EXPECT_NE(msg.find("/points_raw"), std::string::npos) << msg;
   EXPECT_NE(msg.find("velodyne"), std::string::npos) << msg;
   EXPECT_NE(msg.find("/velodyne_points (sensor_msgs/PointCloud2)"), std::string::npos) << msg;
@@ -370,14 +370,14 @@ TEST(BagSourceErrors, TopicOfTheWrongTypeNamesFoundAndExpected) {
   BagSourceOptions o = rigOptions();
   o.imu_topic = "/velodyne_points";
   o.lidars.erase(o.lidars.begin());
-  std::string msg = errorOf([&] { BagSource(path, o); });
+  std::string msg = mmlio::testing::errorOf([&] { BagSource(path, o); });
   EXPECT_NE(msg.find("/velodyne_points"), std::string::npos) << msg;
   EXPECT_NE(msg.find("is sensor_msgs/PointCloud2, expected sensor_msgs/Imu"), std::string::npos) << msg;
 
   o = rigOptions();
   o.lidars[0].topic = "/livox/imu";
   o.imu_topic.clear();
-  msg = errorOf([&] { BagSource(path, o); });
+  msg = mmlio::testing::errorOf([&] { BagSource(path, o); });
   EXPECT_NE(msg.find("is sensor_msgs/Imu, expected sensor_msgs/PointCloud2 or livox_ros_driver/CustomMsg"),
             std::string::npos)
       << msg;
@@ -389,7 +389,7 @@ TEST(BagSourceErrors, ALivoxMessageDeclaredAsASpinningLidarIsAnError) {
   const std::string path = writeRigBag();
   BagSourceOptions o = rigOptions();
   std::swap(o.lidars[0].topic, o.lidars[1].topic);
-  const std::string msg = errorOf([&] { BagSource(path, o); });
+  const std::string msg = mmlio::testing::errorOf([&] { BagSource(path, o); });
   EXPECT_NE(msg.find("livox/lidar (LiDAR 'velodyne')"), std::string::npos) << msg;
   EXPECT_NE(msg.find("declared as a spinning one: give it type: livox"), std::string::npos) << msg;
 }
@@ -399,7 +399,7 @@ TEST(BagSourceErrors, ACloudWhoseFieldsSayTheOtherKindOfLidarStopsTheRunSayingWh
   const std::string path = writeRigBag();
   BagSourceOptions o = rigOptions();
   o.lidars[0].kind = LidarKind::kSolidState;
-  const std::string msg = errorOf([&] {
+  const std::string msg = mmlio::testing::errorOf([&] {
     BagSource src(path, o);
     SensorEvent e;
     while (src.next(&e)) {

@@ -8,10 +8,10 @@
 #include <filesystem>
 
 #include "cloud_builder.hpp"
-#include "error_of.hpp"
+#include "../common/error_of.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/io/bag_info.hpp"
-#include "mmlio/io/rig_config.hpp"
+#include "mmlio/config/rig_config.hpp"
 #include "mmlio/io/rig_starter.hpp"
 
 namespace mmlio::io {
@@ -37,7 +37,7 @@ TEST(StarterRigConfig, AVelodyneALivoxAndItsImuGiveAnHviRigThatLoads) {
       topic("/velodyne_points", "sensor_msgs/PointCloud2", 10,
             {"x(float32)", "y(float32)", "z(float32)", "intensity(float32)", "ring(uint16)", "time(float32)"})};
   const std::string text = starterRigConfig(info);
-  const RigConfig cfg = parseRigConfig(text, "starter.yaml");
+  const config::RigConfig cfg = config::parseRigConfig(text, "starter.yaml");
   EXPECT_EQ(cfg.mode, "hvi");
   EXPECT_EQ(cfg.imu.topic, "/livox/imu");  // the faster IMU: the Livox's own
   ASSERT_EQ(cfg.lidars.size(), 2u);
@@ -60,7 +60,7 @@ TEST(StarterRigConfig, TheCloudsFieldsNameTheDriverAndTheKindsNameTheMode) {
   info.topics = {topic("/imu", "sensor_msgs/msg/Imu", 400),  // in name order, as describeBag lists them
                  topic("/lidar2", "sensor_msgs/msg/PointCloud2", 10, {"x(float32)", "y(float32)", "z(float32)"}),
                  topic("/os/points", "sensor_msgs/msg/PointCloud2", 10, {"x(float32)", "t(uint32)", "ring(uint16)"})};
-  const RigConfig cfg = parseRigConfig(starterRigConfig(info), "starter.yaml");
+  const config::RigConfig cfg = config::parseRigConfig(starterRigConfig(info), "starter.yaml");
   EXPECT_EQ(cfg.mode, "vi");
   ASSERT_EQ(cfg.lidars.size(), 2u);
   EXPECT_EQ(cfg.lidars[0].type, "generic_spinning");
@@ -69,7 +69,7 @@ TEST(StarterRigConfig, TheCloudsFieldsNameTheDriverAndTheKindsNameTheMode) {
 
   info.topics = {topic("/imu", "sensor_msgs/msg/Imu", 200), topic("/a", "livox_ros_driver2/msg/CustomMsg", 10),
                  topic("/b", "livox_ros_driver2/msg/CustomMsg", 10)};
-  const RigConfig two = parseRigConfig(starterRigConfig(info), "starter.yaml");
+  const config::RigConfig two = config::parseRigConfig(starterRigConfig(info), "starter.yaml");
   EXPECT_EQ(two.mode, "hi");
   ASSERT_EQ(two.lidars.size(), 2u);
   EXPECT_EQ(two.lidars[0].name, "livox");
@@ -125,7 +125,7 @@ TEST(StarterRigConfig, ExtrinsicsComeFromTheBagsTfStaticThroughTheFrameTree) {
   }
   const BagInfo info = describeBag(path);
   ASSERT_EQ(info.static_transforms.size(), 2u);
-  const RigConfig cfg = parseRigConfig(starterRigConfig(info), "starter.yaml");
+  const config::RigConfig cfg = config::parseRigConfig(starterRigConfig(info), "starter.yaml");
   ASSERT_EQ(cfg.lidars.size(), 1u);
   EXPECT_EQ(cfg.lidars[0].type, "velodyne");
   const Eigen::Isometry3d want = T_base_imu.inverse() * T_base_velodyne;

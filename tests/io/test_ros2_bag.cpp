@@ -10,6 +10,7 @@
 
 #include "../pipeline/sim_feed.hpp"
 #include "mmlio/core/error.hpp"
+#include "mmlio/config/source_options.hpp"
 #include "mmlio/io/bag_info.hpp"
 #include "mmlio/io/bag_source.hpp"
 #include "mmlio/pipeline/runner.hpp"
@@ -55,7 +56,7 @@ const Fixture& fixture() {
 }
 
 std::vector<SensorEvent> events(const std::string& path) {
-  BagSource src(path, bagSourceOptions(testing::simRigConfig(fixture().sim), "hvi"));
+  BagSource src(path, config::bagSourceOptions(testing::simRigConfig(fixture().sim), "hvi"));
   std::vector<SensorEvent> out;
   SensorEvent e;
   while (src.next(&e)) out.push_back(e);
@@ -167,7 +168,7 @@ TEST(Ros2Bag, ATruncatedMcapIsReadUpToItsLastCompleteChunk) {
   testing::writeMcap(fixture().records, path, {true, "zstd", 256 << 10, false});
   const auto full = events(path);
   fs::resize_file(path, fs::file_size(path) * 6 / 10);  // cut inside a chunk
-  BagSource src(path, bagSourceOptions(testing::simRigConfig(fixture().sim), "hvi"));
+  BagSource src(path, config::bagSourceOptions(testing::simRigConfig(fixture().sim), "hvi"));
   std::vector<SensorEvent> got;
   SensorEvent e;
   while (src.next(&e)) got.push_back(e);
@@ -179,7 +180,7 @@ TEST(Ros2Bag, ATruncatedMcapIsReadUpToItsLastCompleteChunk) {
 }
 
 TEST(Ros2Bag, BadRos2InputGetsOneClearLineOrACountedSkip) {
-  const auto options = bagSourceOptions(testing::simRigConfig(fixture().sim), "hvi");
+  const auto options = config::bagSourceOptions(testing::simRigConfig(fixture().sim), "hvi");
   auto error = [&](const std::string& path) {
     try {
       BagSource src(path, options);

@@ -15,7 +15,7 @@
 #include "mmlio/core/error.hpp"
 #include "mmlio/io/pcd_io.hpp"
 #include "mmlio/io/trajectory_writer.hpp"
-#include "error_of.hpp"
+#include "../common/error_of.hpp"
 
 namespace fs = std::filesystem;
 using namespace mmlio;
@@ -129,15 +129,17 @@ TEST(Tum, MalformedRowErrorNamesFileAndLine) {
   TempDir dir;
   const std::string path = dir.file("bad.txt");
   writeText(path, "# header\n1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 1\n");
-  EXPECT_NE(errorOf([&] { readTum(path); }).find(path + ":3"), std::string::npos) << errorOf([&] { readTum(path); });
+  EXPECT_NE(mmlio::testing::errorOf([&] { readTum(path); }).find(path + ":3"), std::string::npos)
+      << mmlio::testing::errorOf([&] { readTum(path); });
   writeText(path, "1.0 0 0 x 0 0 0 1\n");
-  EXPECT_NE(errorOf([&] { readTum(path); }).find(path + ":1: bad number 'x'"), std::string::npos);
+  EXPECT_NE(mmlio::testing::errorOf([&] { readTum(path); }).find(path + ":1: bad number 'x'"), std::string::npos);
   writeText(path, "1.0 0 0 0 0 0 0 0\n");
-  EXPECT_NE(errorOf([&] { readTum(path); }).find("zero quaternion"), std::string::npos);
+  EXPECT_NE(mmlio::testing::errorOf([&] { readTum(path); }).find("zero quaternion"), std::string::npos);
 }
 
 TEST(Tum, MissingFileErrorNamesThePath) {
-  EXPECT_NE(errorOf([] { readTum("/nonexistent/dir/traj.txt"); }).find("/nonexistent/dir/traj.txt"), std::string::npos);
+  EXPECT_NE(mmlio::testing::errorOf([] { readTum("/nonexistent/dir/traj.txt"); }).find("/nonexistent/dir/traj.txt"),
+            std::string::npos);
 }
 
 TEST(Kitti, RoundTripKeepsAllTwelveNumbersAndStampsExactly) {
@@ -168,8 +170,9 @@ TEST(Kitti, TimesWithWrongLineCountIsAnError) {
   TempDir dir;
   writeKitti(dir.file("p.txt"), sampleTrajectory());
   writeText(dir.file("t.txt"), "0.1\n0.2\n");
-  EXPECT_NE(errorOf([&] { readKitti(dir.file("p.txt"), dir.file("t.txt")); }).find("2 stamps for 5 poses"),
-            std::string::npos);
+  EXPECT_NE(
+      mmlio::testing::errorOf([&] { readKitti(dir.file("p.txt"), dir.file("t.txt")); }).find("2 stamps for 5 poses"),
+      std::string::npos);
 }
 
 TEST(AtomicWrite, FailedWriteLeavesNeitherTheTargetNorATempFile) {
@@ -190,7 +193,7 @@ TEST(AtomicWrite, FailedWriteLeavesNeitherTheTargetNorATempFile) {
 }
 
 TEST(AtomicWrite, UnwritableDirectoryErrorNamesThePath) {
-  const std::string msg = errorOf([] { writeTum("/nonexistent/dir/out.tum", sampleTrajectory()); });
+  const std::string msg = mmlio::testing::errorOf([] { writeTum("/nonexistent/dir/out.tum", sampleTrajectory()); });
   EXPECT_NE(msg.find("/nonexistent/dir/out.tum"), std::string::npos) << msg;
 }
 
@@ -272,7 +275,7 @@ TEST(Pcd, AsciiWithExtraFieldsAndCountReads) {
   ASSERT_EQ(points.size(), 1u);  // the NaN point is dropped
   EXPECT_EQ(points[0].ring, 7);
   EXPECT_EQ(points[0].intensity, 0.f);  // no intensity field
-  EXPECT_NE(errorOf([&] { cloud.column("intensity"); }).find("fields: x y z rgb"), std::string::npos);
+  EXPECT_NE(mmlio::testing::errorOf([&] { cloud.column("intensity"); }).find("fields: x y z rgb"), std::string::npos);
 }
 
 TEST(Pcd, BinaryCompressedDecodesFieldMajorLzfData) {
@@ -327,7 +330,7 @@ TEST(Pcd, TruncatedBinaryDataErrorNamesThePath) {
   writePcdBinary(dir.file("t.pcd"), std::vector<Point>(10));
   std::string bytes = slurp(dir.file("t.pcd"));
   writeText(dir.file("t.pcd"), bytes.substr(0, bytes.size() - 5));
-  const std::string msg = errorOf([&] { readPcd(dir.file("t.pcd")); });
+  const std::string msg = mmlio::testing::errorOf([&] { readPcd(dir.file("t.pcd")); });
   EXPECT_NE(msg.find(dir.file("t.pcd")), std::string::npos);
   EXPECT_NE(msg.find("truncated"), std::string::npos) << msg;
 }
@@ -335,7 +338,7 @@ TEST(Pcd, TruncatedBinaryDataErrorNamesThePath) {
 TEST(Pcd, NotAPcdFileIsAnError) {
   TempDir dir;
   writeText(dir.file("x.pcd"), "hello world\n");
-  EXPECT_NE(errorOf([&] { readPcd(dir.file("x.pcd")); }).find(dir.file("x.pcd")), std::string::npos);
+  EXPECT_NE(mmlio::testing::errorOf([&] { readPcd(dir.file("x.pcd")); }).find(dir.file("x.pcd")), std::string::npos);
 }
 
 // ---- real files -------------------------------------------------------------------------------

@@ -7,15 +7,15 @@
 #include <string>
 
 #include "mmlio/io/bag_writer.hpp"
-#include "mmlio/io/rig_config.hpp"
+#include "mmlio/config/rig_config.hpp"
 #include "mmlio/pipeline/online_pipeline.hpp"
 #include "mmlio/sim/simulator.hpp"
 
 namespace mmlio::testing {
 
 /// The default rig config with the simulator's true extrinsics.
-inline io::RigConfig simRigConfig(const sim::Simulator& sim) {
-  io::RigConfig cfg;
+inline config::RigConfig simRigConfig(const sim::Simulator& sim) {
+  config::RigConfig cfg;
   for (auto& l : cfg.lidars) {
     const LidarExtrinsic e = l.name == "velodyne" ? sim.velodyneExtrinsic() : sim.livoxExtrinsic();
     l.T_imu_sensor = e.T_imu_sensor;

@@ -21,7 +21,7 @@ CorridorRun runCorridor(const std::string& mode, estimator::SurfacePoints surfac
   so.duration_s = 20.0;
   so.livox_pattern = pattern;
   const sim::Simulator sim(so);
-  io::RigConfig cfg = testing::simRigConfig(sim);
+  config::RigConfig cfg = testing::simRigConfig(sim);
   cfg.estimator.surface_points = surface_points;
   Trajectory trajectory;
   CorridorRun run;
@@ -66,7 +66,7 @@ struct BadFrameRun {
 };
 
 BadFrameRun runWithBadFrames(const sim::Simulator& sim, const std::string& mode, const lidar::BadFrameConfig& rule) {
-  io::RigConfig cfg = testing::simRigConfig(sim);
+  config::RigConfig cfg = testing::simRigConfig(sim);
   cfg.estimator.bad_frame = rule;
   BadFrameRun run;
   pipeline::OnlinePipeline online(cfg, mode, [&](const estimator::SweepResult& r) {
@@ -123,7 +123,7 @@ struct LabRun {
 };
 
 LabRun runLabHi(const sim::Simulator& sim, double drift_m_s2) {
-  io::RigConfig cfg = testing::simRigConfig(sim);
+  config::RigConfig cfg = testing::simRigConfig(sim);
   cfg.estimator.degeneracy.drift_m_s2 = drift_m_s2;
   cfg.estimator.imu_noise.acc_noise_density = sim.options().imu.acc_noise_density;
   cfg.estimator.imu_noise.gyro_noise_density = sim.options().imu.gyro_noise_density;

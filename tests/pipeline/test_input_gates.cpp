@@ -14,7 +14,7 @@
 
 #include "mmlio/eval/evaluation.hpp"
 #include "mmlio/core/error.hpp"
-#include "mmlio/io/rig_config.hpp"
+#include "mmlio/config/rig_config.hpp"
 #include "mmlio/pipeline/imu_gate.hpp"
 #include "mmlio/pipeline/runner.hpp"
 #include "mmlio/pipeline/system.hpp"
@@ -138,7 +138,7 @@ TEST(RunBag, AnUnwritableOutputFolderIsRefusedBeforeTheBagIsRead) {
 TEST(LiveReport, JudgesCoverageDegradationAndTrustAsARunDoes) {
   const sim::Simulator sim = office(8.0);
   const Stamp imu_ends = sim.startNs() + fromSec(5.0);
-  io::RigConfig cfg = testing::simRigConfig(sim);
+  config::RigConfig cfg = testing::simRigConfig(sim);
   cfg.mapping.loop_enabled = false;
   System clean(cfg, "hvi");
   testing::replay(sim, clean);
@@ -293,9 +293,9 @@ TEST(RunBag, TheReportNamesItsMmlioAndTheConfigThatRerunsTheRunExactly) {
   EXPECT_EQ(run["calibration"].get<std::string>(), "config");
   // config_used.yaml is the effective config: the mode chosen on the command line, the extrinsics
   // as given; running with it alone gives the same trajectory, pose for pose.
-  const io::RigConfig used = io::loadRigConfig(options.out_dir + "/config_used.yaml");
+  const config::RigConfig used = config::loadRigConfig(options.out_dir + "/config_used.yaml");
   EXPECT_EQ(used.mode, "vi");
-  EXPECT_EQ(io::toYaml(used), run["config_yaml"].get<std::string>());
+  EXPECT_EQ(config::toYaml(used), run["config_yaml"].get<std::string>());
   RunOptions again = options;
   again.config = used;
   again.mode.clear();

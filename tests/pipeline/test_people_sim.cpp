@@ -30,7 +30,7 @@ PeopleRun runCorridor(int people, bool handle_dynamic, double duration_s = 25.0)
   so.people = people;
   so.seed = 4;
   const sim::Simulator sim(so);
-  io::RigConfig cfg = testing::simRigConfig(sim);
+  config::RigConfig cfg = testing::simRigConfig(sim);
   cfg.estimator.dynamic.enabled = handle_dynamic;
   cfg.mapping.clean_map = handle_dynamic;
   cfg.mapping.loop_enabled = false;

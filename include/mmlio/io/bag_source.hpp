@@ -18,7 +18,6 @@
 
 #include "mmlio/core/types.hpp"
 #include "mmlio/io/decode_stats.hpp"
-#include "mmlio/io/rig_config.hpp"
 
 namespace mmlio::io {
 
@@ -35,9 +34,6 @@ struct BagSourceOptions {
   std::string acc_unit = "auto";  // auto | g | m/s2; auto: mean |acc| of the first 50 messages < 3 -> g
   std::vector<SourceLidar> lidars;
 };
-
-/// From activeLidars(cfg, mode) and cfg.imu.
-BagSourceOptions bagSourceOptions(const RigConfig& cfg, const std::string& mode);
 
 struct SensorEvent {
   enum class Kind { kImu, kLidar } kind = Kind::kImu;

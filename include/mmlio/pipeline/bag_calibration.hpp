@@ -8,8 +8,8 @@
 
 #include "mmlio/calib/spatial_calibration.hpp"
 #include "mmlio/calib/time_offset.hpp"
-#include "mmlio/io/calib_file.hpp"
-#include "mmlio/io/rig_config.hpp"
+#include "mmlio/config/calib_file.hpp"
+#include "mmlio/config/rig_config.hpp"
 #include "mmlio/pipeline/json.hpp"
 
 namespace mmlio::pipeline {
@@ -28,8 +28,8 @@ struct BagCalibrationOptions {
 };
 
 struct BagCalibrationResult {
-  io::Calibration calibration;  // both LiDARs, ready for io::applyCalibration / writeCalibration
-  std::string spinning, solid;  // their names
+  config::Calibration calibration;  // both LiDARs, ready for config::applyCalibration / writeCalibration
+  std::string spinning, solid;      // their names
   calib::SpatialCalibrationResult spatial;
   calib::TimeOffsetResult temporal;  // temporal.ok == false: the config's clock offset was kept
   Json report;                       // what was measured, for report.json
@@ -39,7 +39,7 @@ struct BagCalibrationResult {
 /// Throws mmlio::Error with a one-line reason when it cannot calibrate: the config lacks a spinning
 /// or a solid-state LiDAR, the rig moves during the stationary window, too few points, no overlap,
 /// GICP refuses.
-BagCalibrationResult calibrateBag(const std::string& bag_path, const io::RigConfig& cfg,
+BagCalibrationResult calibrateBag(const std::string& bag_path, const config::RigConfig& cfg,
                                   const BagCalibrationOptions& options = BagCalibrationOptions());
 
 }  // namespace mmlio::pipeline

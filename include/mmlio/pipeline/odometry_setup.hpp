@@ -4,11 +4,11 @@
 #include <vector>
 
 #include "mmlio/estimator/odometry.hpp"
-#include "mmlio/io/rig_config.hpp"
+#include "mmlio/config/rig_config.hpp"
 
 namespace mmlio::pipeline {
 
 /// The LiDARs active in `mode`, with extrinsics from the config (after any calibration override).
-std::vector<estimator::LidarSetup> lidarSetups(const io::RigConfig& cfg, const std::string& mode);
+std::vector<estimator::LidarSetup> lidarSetups(const config::RigConfig& cfg, const std::string& mode);
 
 }  // namespace mmlio::pipeline

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "mmlio/estimator/odometry.hpp"
-#include "mmlio/io/rig_config.hpp"
+#include "mmlio/config/rig_config.hpp"
 #include "mmlio/lidar/sweep_aligner.hpp"
 #include "mmlio/pipeline/imu_gate.hpp"
 #include "mmlio/pipeline/stamp_jump_guard.hpp"
@@ -21,7 +21,7 @@ class OnlinePipeline {
   using SweepCallback = std::function<void(estimator::SweepResult)>;  // the callee may keep it
 
   /// Throws mmlio::Error on a bad mode or a config with no active LiDAR.
-  OnlinePipeline(const io::RigConfig& cfg, const std::string& mode, SweepCallback on_sweep);
+  OnlinePipeline(const config::RigConfig& cfg, const std::string& mode, SweepCallback on_sweep);
 
   void addImu(const ImuSample& sample);
   /// scan.sensor names a configured LiDAR; others are ignored. Its clock offset is applied here.

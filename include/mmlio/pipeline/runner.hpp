@@ -8,7 +8,7 @@
 #include <string>
 
 #include "mmlio/core/types.hpp"
-#include "mmlio/io/rig_config.hpp"
+#include "mmlio/config/rig_config.hpp"
 #include "mmlio/pipeline/run_report.hpp"
 #include "mmlio/pipeline/stage_stats.hpp"
 #include "mmlio/pipeline/system.hpp"
@@ -18,7 +18,7 @@ namespace mmlio::pipeline {
 struct RunOptions {
   std::string bag_path;
   std::string out_dir;                      // empty: write nothing (bench)
-  io::RigConfig config;                     // calibration already applied
+  config::RigConfig config;                 // calibration already applied
   std::string mode;                         // empty: config.mode
   bool progress = true;                     // progress bar on stderr
   std::string gt_path;                      // optional TUM ground truth: evaluation in the report

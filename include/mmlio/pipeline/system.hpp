@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "mmlio/core/timer.hpp"
-#include "mmlio/io/rig_config.hpp"
+#include "mmlio/config/rig_config.hpp"
 #include "mmlio/pipeline/degeneracy_tally.hpp"
 #include "mmlio/pipeline/mapping_thread.hpp"
 #include "mmlio/pipeline/online_pipeline.hpp"
@@ -37,7 +37,7 @@ class System {
   using TimingObserver = std::function<void(Stamp sweep_end_ns, const StageTimes& times_ms)>;
 
   /// Throws mmlio::Error on a bad mode or a config with no active LiDAR.
-  System(const io::RigConfig& cfg, const std::string& mode, SweepObserver observer = {});
+  System(const config::RigConfig& cfg, const std::string& mode, SweepObserver observer = {});
 
   void addImu(const ImuSample& sample) {
     if (first_imu_ns_ == 0) first_imu_ns_ = sample.stamp_ns;
@@ -75,7 +75,7 @@ class System {
 
   const estimator::Odometry& odometry() const { return online_.odometry(); }
   std::size_t sweepsProcessed() const { return online_.sweepsProcessed(); }
-  const io::RigConfig& config() const { return cfg_; }
+  const config::RigConfig& config() const { return cfg_; }
   const std::string& mode() const { return mode_; }
 
  private:
@@ -84,7 +84,7 @@ class System {
   /// Estimator stamps back in the input's time (they differ after a time-base jump).
   Trajectory inputTime(Trajectory trajectory) const;
 
-  io::RigConfig cfg_;
+  config::RigConfig cfg_;
   std::string mode_;
   std::string effective_config_yaml_;  // report.json -> run.config_yaml, config_used.yaml
   SweepObserver observer_;

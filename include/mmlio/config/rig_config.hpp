@@ -15,9 +15,9 @@
 #include "mmlio/backend/mapping_config.hpp"
 #include "mmlio/core/types.hpp"
 #include "mmlio/estimator/odometry.hpp"
-#include "mmlio/io/calib_file.hpp"
+#include "mmlio/config/calib_file.hpp"
 
-namespace mmlio::io {
+namespace mmlio::config {
 
 struct LidarConfig {
   std::string name;   // unique, e.g. "velodyne", "livox"; calibration files key on it
@@ -88,4 +88,4 @@ LidarExtrinsic toExtrinsic(const LidarConfig& lidar);
 /// names of configured LiDARs the calibration does not cover. Throws if it names an unknown LiDAR.
 std::vector<std::string> applyCalibration(RigConfig& cfg, const Calibration& calibration);
 
-}  // namespace mmlio::io
+}  // namespace mmlio::config

@@ -19,7 +19,7 @@
 #include <map>
 #include <string>
 
-namespace mmlio::io {
+namespace mmlio::config {
 
 struct SensorCalibration {
   Eigen::Isometry3d T_imu_sensor = Eigen::Isometry3d::Identity();  // sensor -> IMU frame
@@ -38,4 +38,4 @@ Calibration readCalibration(const std::string& path);
 /// they cannot override); all other entries are written as top-level metadata after the sensors.
 void writeCalibration(const std::string& path, const Calibration& sensors, const YAML::Node& extra = YAML::Node());
 
-}  // namespace mmlio::io
+}  // namespace mmlio::config

@@ -26,7 +26,7 @@
 #include <utility>
 #include <vector>
 
-namespace mmlio::io {
+namespace mmlio::config {
 
 // ---- scalar conversions (reading throws mmlio::Error prefixed with `where`) -------------------
 void decodeYaml(const YAML::Node& node, const std::string& where, bool& value);
@@ -234,4 +234,4 @@ template <typename T, typename BindFn> std::string documentedYaml(T& value, Bind
   return os.str();
 }
 
-}  // namespace mmlio::io
+}  // namespace mmlio::config

@@ -1,4 +1,4 @@
-#include "mmlio/io/yaml_binder.hpp"
+#include "mmlio/config/yaml_binder.hpp"
 
 #include <Eigen/SVD>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include "mmlio/core/log.hpp"
 #include "mmlio/io/trajectory_writer.hpp"
 
-namespace mmlio::io {
+namespace mmlio::config {
 
 namespace {
 
@@ -123,7 +123,7 @@ Eigen::Isometry3d decodeXyzRotation(const YAML::Node& node, const std::string& w
     Eigen::Quaterniond quaternion(q[3], q[0], q[1], q[2]);
     const double norm = quaternion.norm();
     if (!std::isfinite(norm) || std::abs(norm - 1.0) > kNearlyOrthonormal)
-      throw Error(where + ".quaternion: not a unit quaternion (norm " + formatDouble(norm) + ")");
+      throw Error(where + ".quaternion: not a unit quaternion (norm " + io::formatDouble(norm) + ")");
     if (std::abs(norm - 1.0) > 1e-6)
       log::warn(where, ".quaternion: norm ", norm, ", normalised (give 7 or more significant digits to silence this)");
     T.linear() = quaternion.normalized().toRotationMatrix();
@@ -176,7 +176,7 @@ std::string encodeYaml(int value, int) { return std::to_string(value); }
 std::string encodeYaml(double value, int) {
   if (std::isnan(value)) return ".nan";
   if (std::isinf(value)) return value > 0 ? ".inf" : "-.inf";
-  std::string text = formatDouble(value);
+  std::string text = io::formatDouble(value);
   if (text.find_first_of(".e") == std::string::npos) text += ".0";  // keep it visibly a float
   return text;
 }
@@ -199,7 +199,7 @@ std::string encodeYaml(const Eigen::Isometry3d& value, int indent) {
   std::string text = "[";
   for (int r = 0; r < 4; ++r) {
     if (r > 0) text += ",\n" + std::string(static_cast<std::size_t>(indent), ' ');
-    for (int c = 0; c < 4; ++c) text += (c ? ", " : "") + formatDouble(m(r, c));
+    for (int c = 0; c < 4; ++c) text += (c ? ", " : "") + io::formatDouble(m(r, c));
   }
   return text + "]";
 }
@@ -294,4 +294,4 @@ void YamlBinder::emitKey(const std::string& key, const std::string& doc, const s
   }
 }
 
-}  // namespace mmlio::io
+}  // namespace mmlio::config

@@ -10,14 +10,14 @@
 
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
-#include "mmlio/io/calib_file.hpp"
-#include "mmlio/io/rig_config.hpp"
-#include "mmlio/io/yaml_binder.hpp"
-#include "error_of.hpp"
+#include "mmlio/config/calib_file.hpp"
+#include "mmlio/config/rig_config.hpp"
+#include "mmlio/config/yaml_binder.hpp"
+#include "../common/error_of.hpp"
 
 namespace fs = std::filesystem;
 using namespace mmlio;
-using namespace mmlio::io;
+using namespace mmlio::config;
 
 namespace {
 

@@ -1,12 +1,12 @@
-#include "mmlio/io/calib_file.hpp"
+#include "mmlio/config/calib_file.hpp"
 
 #include <fstream>
 
 #include "mmlio/core/error.hpp"
 #include "mmlio/io/trajectory_writer.hpp"
-#include "mmlio/io/yaml_binder.hpp"
+#include "mmlio/config/yaml_binder.hpp"
 
-namespace mmlio::io {
+namespace mmlio::config {
 
 namespace {
 
@@ -66,7 +66,7 @@ void writeCalibration(const std::string& path, const Calibration& sensors, const
   for (const auto& [name, calib] : sensors)
     validateRigidTransform(calib.T_imu_sensor.matrix(), "writing calibration '" + path + "': sensor '" + name + "'");
 
-  writeFileAtomically(path, [&](std::ostream& out) {
+  io::writeFileAtomically(path, [&](std::ostream& out) {
     out << "# mmlio calibration. T_imu_sensor: 4x4 row-major, maps sensor points into the IMU frame.\n"
         << "# time_offset_s: t_imu = t_stamp + time_offset_s.\n";
     for (const auto& [name, calib] : sensors) {
@@ -96,4 +96,4 @@ void writeCalibration(const std::string& path, const Calibration& sensors, const
   });
 }
 
-}  // namespace mmlio::io
+}  // namespace mmlio::config

@@ -1,4 +1,4 @@
-#include "mmlio/io/rig_config.hpp"
+#include "mmlio/config/rig_config.hpp"
 
 #include <cmath>
 #include <filesystem>
@@ -7,9 +7,9 @@
 
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
-#include "mmlio/io/yaml_binder.hpp"
+#include "mmlio/config/yaml_binder.hpp"
 
-namespace mmlio::io {
+namespace mmlio::config {
 
 // ---- the schema: one line per field --------------------------------------------------------
 
@@ -419,4 +419,4 @@ std::vector<std::string> applyCalibration(RigConfig& cfg, const Calibration& cal
   return uncovered;
 }
 
-}  // namespace mmlio::io
+}  // namespace mmlio::config

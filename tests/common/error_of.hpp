@@ -6,7 +6,7 @@
 
 #include "mmlio/core/error.hpp"
 
-namespace mmlio::io {
+namespace mmlio::testing {
 
 inline std::string errorOf(const std::function<void()>& f) {
   try {
@@ -17,11 +17,11 @@ inline std::string errorOf(const std::function<void()>& f) {
   return "<no mmlio::Error thrown>";
 }
 
-}  // namespace mmlio::io
+}  // namespace mmlio::testing
 
 /// The statement throws an mmlio::Error whose message contains `text`.
-#define EXPECT_ERROR_CONTAINS(statement, text)                            \
-  do {                                                                    \
-    const std::string msg_ = errorOf([&] { statement; });                 \
-    EXPECT_NE(msg_.find(text), std::string::npos) << "message: " << msg_; \
+#define EXPECT_ERROR_CONTAINS(statement, text)                              \
+  do {                                                                      \
+    const std::string msg_ = ::mmlio::testing::errorOf([&] { statement; }); \
+    EXPECT_NE(msg_.find(text), std::string::npos) << "message: " << msg_;   \
   } while (0)

@@ -1,0 +1,14 @@
+#pragma once
+// What the bag reader and the live node's subscriptions take of a rig config: topics, units and
+// each active LiDAR's decoding options.
+#include <string>
+
+#include "mmlio/config/rig_config.hpp"
+#include "mmlio/io/bag_source.hpp"
+
+namespace mmlio::config {
+
+/// From activeLidars(cfg, mode) and cfg.imu.
+io::BagSourceOptions bagSourceOptions(const RigConfig& cfg, const std::string& mode);
+
+}  // namespace mmlio::config
