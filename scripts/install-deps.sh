@@ -13,7 +13,7 @@ PACKAGES=(
   ros-core python3-rosbag python3-sensor-msgs python3-nav-msgs python3-tf2-msgs python3-std-srvs
   python3
   parallel bc
-  clang-format
+  clang-format clang-tidy
   libjs-three chromium
 )
 

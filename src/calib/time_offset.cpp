@@ -73,7 +73,7 @@ std::vector<SensorRotation> sweepRotations(const std::vector<LidarScan>& sweeps,
     std::vector<Eigen::Vector3d> v;
     v.reserve(s.points.size());
     for (const Point& p : s.points)
-      if (p.xyz.allFinite() && p.xyz.norm() > 1.0) v.push_back(p.xyz.cast<double>());
+      if (p.xyz.allFinite() && p.xyz.norm() > 1.0) v.emplace_back(p.xyz.cast<double>());
     return v;
   };
   Eigen::Isometry3d prior = Eigen::Isometry3d::Identity();

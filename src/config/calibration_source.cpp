@@ -6,7 +6,7 @@
 namespace mmlio::config {
 
 std::string resolveCalibration(RigConfig& cfg, const std::string& override_source) {
-  const std::string source = override_source.empty() ? cfg.calibration : override_source;
+  std::string source = override_source.empty() ? cfg.calibration : override_source;
   if (source == "config" || source == "auto") return source;
   for (const auto& name : applyCalibration(cfg, readCalibration(source)))
     log::emit(log::Level::kWarn, "calibration ", source, " has no entry for LiDAR '", name,

@@ -48,8 +48,8 @@ std::string stampText(std::int64_t stamp_ns) {
   // must not turn 0.9995 s into "0.1000".
   const std::int64_t ms = (stamp_ns >= 0 ? stamp_ns + 500000 : stamp_ns - 500000) / 1000000;
   char text[32];
-  std::snprintf(text, sizeof text, "%s%" PRId64 ".%03" PRId64, ms < 0 ? "-" : "", std::llabs(ms) / 1000,
-                std::llabs(ms) % 1000);
+  std::snprintf(text, sizeof text, "%s%" PRId64 ".%03" PRId64, ms < 0 ? "-" : "",
+                static_cast<std::int64_t>(std::llabs(ms) / 1000), static_cast<std::int64_t>(std::llabs(ms) % 1000));
   return text;
 }
 

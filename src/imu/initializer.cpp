@@ -38,8 +38,8 @@ ImuInitializer::WindowStats ImuInitializer::stats() const {
       a += window_[i].acc_m_s2;
       g += window_[i].gyro_rad_s;
     }
-    acc_means.push_back(a / per_block);
-    gyro_means.push_back(g / per_block);
+    acc_means.emplace_back(a / per_block);
+    gyro_means.emplace_back(g / per_block);
   }
   for (std::size_t b = 0; b < acc_means.size(); ++b) {
     s.acc_std += (acc_means[b] - s.mean_acc).squaredNorm();

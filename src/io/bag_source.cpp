@@ -281,6 +281,7 @@ void BagSource::Impl::openRos2(const BagSourceOptions& options) {
   ros2 = detail::openRos2Bag(path);
   const std::vector<detail::Ros2Topic>& topics = ros2->topics();
   std::vector<std::pair<std::string, std::string>> connections;
+  connections.reserve(topics.size());
   for (const detail::Ros2Topic& t : topics) connections.emplace_back(t.name, t.type);
   checkTopics(options, connections);
   if (streams.empty()) throw Error("nothing to read from " + path + ": no IMU topic and no LiDAR configured");

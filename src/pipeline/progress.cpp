@@ -1,5 +1,6 @@
 #include "mmlio/pipeline/progress.hpp"
 
+#include <cmath>
 #include <unistd.h>
 
 #include <algorithm>
@@ -33,7 +34,7 @@ void ProgressBar::finish(const std::string& status) {
 
 void ProgressBar::draw(double fraction, const std::string& status, bool final_line) {
   constexpr int kWidth = 30;
-  const int filled = static_cast<int>(fraction * kWidth + 0.5);
+  const int filled = static_cast<int>(std::lround(fraction * kWidth));
   std::string bar(static_cast<std::size_t>(filled), '#');
   bar.append(static_cast<std::size_t>(kWidth - filled), '.');
   std::fprintf(stderr, "%s%s [%s] %3.0f%% %s%s", tty_ ? "\r\033[K" : "", label_.c_str(), bar.c_str(), fraction * 100.0,

@@ -118,26 +118,26 @@ std::string view3dHtml(const RunReport& r, const Trajectory& trajectory, const s
   std::vector<Eigen::Vector3f> points, poses, keyframes, loops;
   std::vector<std::uint8_t> intensity;
   for (std::size_t i = 0; i < map_world.size(); i += stride) {
-    points.push_back((map_world[i].xyz.cast<double>() - origin).cast<float>());
+    points.emplace_back((map_world[i].xyz.cast<double>() - origin).cast<float>());
     intensity.push_back(static_cast<std::uint8_t>(std::clamp(map_world[i].intensity, 0.f, 255.f)));
   }
   const std::size_t pose_stride = std::max<std::size_t>(1, trajectory.size() / 20000 + 1);
   for (std::size_t i = 0; i < trajectory.size(); i += pose_stride)
-    poses.push_back((trajectory[i].T_world_body.translation() - origin).cast<float>());
+    poses.emplace_back((trajectory[i].T_world_body.translation() - origin).cast<float>());
   Stamp first_keyframe_ns = -1;
   for (const RunReport::SweepSample& s : r.timeline) {
     if (!s.keyframe) continue;
     if (first_keyframe_ns < 0) first_keyframe_ns = s.stamp_ns;
     if (const StampedPose* p = poseAt(trajectory, s.stamp_ns))
-      keyframes.push_back((p->T_world_body.translation() - origin).cast<float>());
+      keyframes.emplace_back((p->T_world_body.translation() - origin).cast<float>());
   }
   if (first_keyframe_ns < 0 && !trajectory.empty()) first_keyframe_ns = trajectory.front().stamp_ns;
   for (const ClosedLoop& loop : r.mapping.loops) {
     const StampedPose* a = poseAt(trajectory, first_keyframe_ns + fromSec(loop.query_s));
     const StampedPose* b = poseAt(trajectory, first_keyframe_ns + fromSec(loop.match_s));
     if (!a || !b) continue;
-    loops.push_back((a->T_world_body.translation() - origin).cast<float>());
-    loops.push_back((b->T_world_body.translation() - origin).cast<float>());
+    loops.emplace_back((a->T_world_body.translation() - origin).cast<float>());
+    loops.emplace_back((b->T_world_body.translation() - origin).cast<float>());
   }
   std::vector<std::uint8_t> data;
   data.reserve(12 * (points.size() + poses.size() + keyframes.size() + loops.size()) + intensity.size());
@@ -151,6 +151,7 @@ std::string view3dHtml(const RunReport& r, const Trajectory& trajectory, const s
   if (points.empty()) low = high = Eigen::Vector3f::Zero();
   // Height colours span the 2nd to 98th percentile, so a few stray points do not wash them out.
   std::vector<float> z;
+  z.reserve(points.size());
   for (const Eigen::Vector3f& p : points) z.push_back(p.z());
   float z_low = low.z(), z_high = high.z();
   if (z.size() > 50) {
@@ -231,11 +232,11 @@ std::string plotsHtml(const RunReport& r, const Trajectory& trajectory, const st
     if (r.evaluation) {
       std::vector<Eigen::Vector2d> gt;
       const Eigen::Isometry3d T_est_gt = r.evaluation->T_gt_est.inverse();
-      for (const Eigen::Vector3d& p : r.evaluation->gt_xyz) gt.push_back((T_est_gt * p).head<2>());
+      for (const Eigen::Vector3d& p : r.evaluation->gt_xyz) gt.emplace_back((T_est_gt * p).head<2>());
       plot.line(std::move(gt), eval::colors::kGroundTruth, 2.5, "ground truth");
     }
     std::vector<Eigen::Vector2d> est;
-    for (const StampedPose& p : trajectory) est.push_back(p.T_world_body.translation().head<2>());
+    for (const StampedPose& p : trajectory) est.emplace_back(p.T_world_body.translation().head<2>());
     if (!est.empty()) plot.marker(est.front(), eval::colors::kStart, "start");
     plot.line(std::move(est), eval::colors::kEstimate, 1.5, "estimate");
     figure(plot.render());

@@ -56,7 +56,7 @@ double StageStats::maxMs(const std::string& stage) const {
 
 std::vector<std::string> StageStats::stages() const {
   std::vector<std::string> out = order_;
-  if (samples_.count("total")) out.push_back("total");
+  if (samples_.count("total")) out.emplace_back("total");
   return out;
 }
 

@@ -78,7 +78,8 @@ void System::onSweep(estimator::SweepResult r) {
   timeline_.push_back(sample);
   timing_.add(times);
   if (timing_observer_) timing_observer_(stamp_ns, times);
-  if (observer_) observer_(r);
+  // r was moved to the back end only without an observer.
+  if (observer_) observer_(r);  // NOLINT(bugprone-use-after-move)
 }
 
 void System::finish() {

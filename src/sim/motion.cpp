@@ -51,6 +51,7 @@ struct PlannedWalk {
 
 PlannedWalk planWalk(const std::vector<Waypoint>& waypoints, const WalkConfig& config, double total_duration_s) {
   std::vector<Vec6> poses;
+  poses.reserve(waypoints.size());
   for (const Waypoint& w : waypoints) poses.push_back(poseOf(w));
   std::vector<double> leg;
   double full_s = 0.0;
@@ -72,7 +73,7 @@ PlannedWalk planWalk(const std::vector<Waypoint>& waypoints, const WalkConfig& c
       for (size_t i = 0; i < leg.size() && prefix_s > 1e-6; ++i) {
         const double dt = std::min(prefix_s, leg[i]);
         const double u = dt / leg[i];
-        out.push_back(poses[i] + u * (poses[i + 1] - poses[i]));
+        out.emplace_back(poses[i] + u * (poses[i + 1] - poses[i]));
         out_leg.push_back(dt);
         prefix_s -= dt;
       }

@@ -77,7 +77,7 @@ Simulator::Simulator(SimOptions options) : options_(std::move(options)) {
     const Eigen::Vector3d p = motion_.at(t).p_world;
     path_length_m_ += (p - prev).norm();
     prev = p;
-    route.push_back(p.head<2>());
+    route.emplace_back(p.head<2>());
   }
   if (options_.people < 0) throw Error("the number of people must be >= 0");
   crowd_ = Crowd(scene_, route, options_.people, options_.seed);
