@@ -10,7 +10,7 @@
 #include "mmlio/lidar/voxel_filter.hpp"
 #include "mmlio/map/range_image.hpp"
 #include "mmlio/map/voxel_hash_map.hpp"
-#include "mmlio/pipeline/map_accumulator.hpp"
+#include "mmlio/backend/map_accumulator.hpp"
 
 namespace {
 
@@ -170,7 +170,7 @@ void BM_MapAccumulatorKeyframe(benchmark::State& state) {
   const LidarScan scan = synth::vlp16Room(hall, 0.01);
   std::vector<Point> strided;
   for (std::size_t i = 0; i < scan.points.size(); i += 4) strided.push_back(scan.points[i]);
-  pipeline::MapAccumulator acc(0.05);
+  backend::MapAccumulator acc(0.05);
   for (auto _ : state) {
     acc.clear();
     for (int k = 0; k < 10; ++k) {

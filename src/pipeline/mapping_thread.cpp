@@ -8,7 +8,7 @@
 
 namespace mmlio::pipeline {
 
-MappingThread::MappingThread(MappingBackend::Config cfg, std::size_t capacity)
+MappingThread::MappingThread(backend::MappingBackend::Config cfg, std::size_t capacity)
     : cfg_(std::move(cfg)), backend_(cfg_), capacity_(std::max<std::size_t>(1, capacity)), worker_([this] { run(); }) {}
 
 MappingThread::~MappingThread() {
@@ -22,7 +22,7 @@ MappingThread::~MappingThread() {
 }
 
 void MappingThread::addSweep(estimator::SweepResult sweep) {
-  MappingBackend::keepWhatTheMapTakes(&sweep, handed_++, cfg_);
+  backend::MappingBackend::keepWhatTheMapTakes(&sweep, handed_++, cfg_);
   std::unique_lock<std::mutex> lock(mutex_);
   not_full_.wait(lock, [this] { return queue_.size() < capacity_ || closing_; });
   if (closing_) return;
@@ -68,7 +68,7 @@ std::size_t MappingThread::queueHighWater() const {
   return queue_high_water_;
 }
 
-MappingBackend& MappingThread::finish() {
+backend::MappingBackend& MappingThread::finish() {
   if (!finished_) {
     {
       std::lock_guard<std::mutex> lock(mutex_);

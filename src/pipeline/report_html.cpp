@@ -132,7 +132,7 @@ std::string view3dHtml(const RunReport& r, const Trajectory& trajectory, const s
       keyframes.emplace_back((p->T_world_body.translation() - origin).cast<float>());
   }
   if (first_keyframe_ns < 0 && !trajectory.empty()) first_keyframe_ns = trajectory.front().stamp_ns;
-  for (const ClosedLoop& loop : r.mapping.loops) {
+  for (const backend::ClosedLoop& loop : r.mapping.loops) {
     const StampedPose* a = poseAt(trajectory, first_keyframe_ns + fromSec(loop.query_s));
     const StampedPose* b = poseAt(trajectory, first_keyframe_ns + fromSec(loop.match_s));
     if (!a || !b) continue;

@@ -122,7 +122,7 @@ Json toJson(const RunReport& r) {
              {"loops_accepted", r.mapping.accepted},
              {"candidates_rejected", r.mapping.candidates_rejected},
              {"loops", Json::array()}};
-  for (const ClosedLoop& l : r.mapping.loops)
+  for (const backend::ClosedLoop& l : r.mapping.loops)
     mapping["loops"].push_back(
         {{"query_s", l.query_s}, {"match_s", l.match_s}, {"fitness_m", l.fitness_m}, {"overlap", l.overlap}});
   if (!r.mapping_error.empty()) mapping["error"] = r.mapping_error;

@@ -100,21 +100,21 @@ Trajectory System::inputTime(Trajectory trajectory) const {
 }
 
 Trajectory System::trajectory() const {
-  return inputTime(mapping_.read([](const MappingBackend& b) { return b.correctedTrajectory(); }));
+  return inputTime(mapping_.read([](const backend::MappingBackend& b) { return b.correctedTrajectory(); }));
 }
 
 Stamp System::externalStamp(Stamp internal_ns) const { return online_.externalStamp(internal_ns); }
 
 Eigen::Isometry3d System::mapFromOdom() const {
-  return mapping_.read([](const MappingBackend& b) { return b.correction(); });
+  return mapping_.read([](const backend::MappingBackend& b) { return b.correction(); });
 }
 
 std::size_t System::loops() const {
-  return mapping_.read([](const MappingBackend& b) { return b.loops(); });
+  return mapping_.read([](const backend::MappingBackend& b) { return b.loops(); });
 }
 
 std::vector<Point> System::map() const {
-  return mapping_.read([](const MappingBackend& b) { return b.map(); });
+  return mapping_.read([](const backend::MappingBackend& b) { return b.map(); });
 }
 
 RunReport System::report(Stamp stream_end_ns, const TrustLimits& limits) const {
@@ -146,7 +146,7 @@ RunReport System::report(Stamp stream_end_ns, const TrustLimits& limits) const {
   const double sensor_s = first_imu_ns_ > 0 ? toSec(odometry().lastImuNs() - first_imu_ns_) : 0.0;
   r.realtime_factor = r.wall_time_s > 0 ? sensor_s / r.wall_time_s : 0.0;
   r.dynamic = dynamic_;
-  mapping_.read([&r](const MappingBackend& b) {
+  mapping_.read([&r](const backend::MappingBackend& b) {
     r.mapping = b.loopFigures();
     r.dynamic.map_points_judged = b.ghostRemoval().judged_points;
     r.dynamic.map_points_removed = b.ghostRemoval().removed_points;
@@ -195,7 +195,7 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
   std::vector<Point> map_points, dynamic_map;
   std::map<std::string, std::vector<Point>> lidar_maps;
   Stopwatch assembly;
-  mapping_.read([&](const MappingBackend& b) {
+  mapping_.read([&](const backend::MappingBackend& b) {
     trajectory = inputTime(b.correctedTrajectory());
     map_points = b.map();
     if (cfg_.mapping.dynamic_map) dynamic_map = b.dynamicMap();

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "../backend/synthetic_scene.hpp"
-#include "mmlio/pipeline/mapping_backend.hpp"
+#include "mmlio/backend/mapping_backend.hpp"
 #include "mmlio/pipeline/mapping_thread.hpp"
 
 namespace mmlio::pipeline {
@@ -47,8 +47,8 @@ estimator::SweepResult sweepAt(const Walk& w, std::size_t i, const backend::test
   return r;
 }
 
-MappingBackend::Config config() {
-  MappingBackend::Config cfg;
+backend::MappingBackend::Config config() {
+  backend::MappingBackend::Config cfg;
   cfg.loop_check_every = 4;  // keyframe 4 is checked (its candidates are too recent), 5 is not
   return cfg;
 }
@@ -56,7 +56,7 @@ MappingBackend::Config config() {
 TEST(MappingBackend, ClosesTheLoopOfTheLastKeyframeWhenTheRunFinishes) {
   const auto scene = backend::testing::roomA();
   const Walk w = roomWalk();
-  MappingBackend backend(config());
+  backend::MappingBackend backend(config());
   for (std::size_t i = 0; i < w.truth.size(); ++i) backend.addSweep(sweepAt(w, i, scene));
   ASSERT_EQ(backend.keyframes(), 6u);
   EXPECT_EQ(backend.loops(), 0u);
@@ -77,9 +77,9 @@ TEST(MappingBackend, ClosesTheLoopOfTheLastKeyframeWhenTheRunFinishes) {
 TEST(MappingBackend, FinishDoesNothingWithLoopClosureOff) {
   const auto scene = backend::testing::roomA();
   const Walk w = roomWalk();
-  MappingBackend::Config cfg = config();
+  backend::MappingBackend::Config cfg = config();
   cfg.loop_enabled = false;
-  MappingBackend backend(cfg);
+  backend::MappingBackend backend(cfg);
   for (std::size_t i = 0; i < w.truth.size(); ++i) backend.addSweep(sweepAt(w, i, scene));
   backend.finish();
   EXPECT_EQ(backend.loops(), 0u);
@@ -102,12 +102,12 @@ TEST(MappingBackend, PerLidarMapsKeepEachLidarsPointsApart) {
     p.xyz = Eigen::Vector3f(i < 30 ? 5.f : -5.f, 0.1f * static_cast<float>(i), 1.f);
     r.points_body.push_back(p);
   }
-  MappingBackend::Config cfg;
+  backend::MappingBackend::Config cfg;
   cfg.loop_enabled = false;
   cfg.map_leaf_m = 0.0;  // every point
   cfg.map_point_stride = 1;
   cfg.per_lidar_maps = true;
-  MappingBackend backend(cfg);
+  backend::MappingBackend backend(cfg);
   backend.addSweep(r);
   const auto names = backend.lidarNames();
   ASSERT_EQ(names.size(), 2u);
@@ -120,7 +120,7 @@ TEST(MappingBackend, PerLidarMapsKeepEachLidarsPointsApart) {
   EXPECT_TRUE(backend.lidarMap("ouster").empty());
 
   cfg.per_lidar_maps = false;
-  MappingBackend merged(cfg);
+  backend::MappingBackend merged(cfg);
   merged.addSweep(r);
   EXPECT_TRUE(merged.lidarNames().empty());
   EXPECT_EQ(merged.map().size(), 50u);
@@ -129,12 +129,12 @@ TEST(MappingBackend, PerLidarMapsKeepEachLidarsPointsApart) {
 TEST(MappingThread, OnItsOwnThreadTheBackEndGivesExactlyWhatItGivesInline) {
   const auto scene = backend::testing::roomA();
   const Walk w = roomWalk();
-  MappingBackend inline_backend(config());
+  backend::MappingBackend inline_backend(config());
   for (std::size_t i = 0; i < w.truth.size(); ++i) inline_backend.addSweep(sweepAt(w, i, scene));
   inline_backend.finish();
   MappingThread thread(config(), 2);  // a queue shorter than the run: the producer waits
   for (std::size_t i = 0; i < w.truth.size(); ++i) thread.addSweep(sweepAt(w, i, scene));
-  MappingBackend& threaded = thread.finish();
+  backend::MappingBackend& threaded = thread.finish();
   ASSERT_EQ(threaded.loops(), 1u);  // the loop of the last keyframe, as inline
   const Trajectory a = inline_backend.correctedTrajectory(), b = threaded.correctedTrajectory();
   ASSERT_EQ(a.size(), b.size());
@@ -146,7 +146,7 @@ TEST(MappingThread, OnItsOwnThreadTheBackEndGivesExactlyWhatItGivesInline) {
 TEST(MappingThread, QueuesSweepsWithoutAKeyframeThinnedToWhatTheMapTakesAndMapsTheSame) {
   const auto scene = backend::testing::roomA();
   const Walk w = roomWalk();
-  MappingBackend::Config cfg = config();
+  backend::MappingBackend::Config cfg = config();
   cfg.map_point_stride = 3;  // with map_leaf_m 0: every point the map takes shows in it
   cfg.map_leaf_m = 0.0;
   // Each keyframe is followed by two sweeps that open none (other scans from the same place).
@@ -166,16 +166,16 @@ TEST(MappingThread, QueuesSweepsWithoutAKeyframeThinnedToWhatTheMapTakesAndMapsT
       }
       sweeps.push_back(r);
     }
-  MappingBackend inline_backend(cfg);
+  backend::MappingBackend inline_backend(cfg);
   for (const auto& r : sweeps) inline_backend.addSweep(r);
   inline_backend.finish();
   estimator::SweepResult thinned = sweeps[1];
-  MappingBackend::keepWhatTheMapTakes(&thinned, 1, cfg);
+  backend::MappingBackend::keepWhatTheMapTakes(&thinned, 1, cfg);
   EXPECT_TRUE(thinned.points_body_thinned);
   EXPECT_EQ(thinned.points_body.size(), (sweeps[1].points_body.size() + 1) / 3);  // from offset 1 of 3
   MappingThread thread(cfg, 2);
   for (const auto& r : sweeps) thread.addSweep(r);
-  MappingBackend& threaded = thread.finish();
+  backend::MappingBackend& threaded = thread.finish();
   const std::vector<Point> a = inline_backend.map(), b = threaded.map();
   ASSERT_EQ(a.size(), b.size());
   for (std::size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i].xyz, b[i].xyz) << i;

@@ -3,7 +3,7 @@
 #include <cstdlib>
 
 #include "mmlio/eval/evaluation.hpp"
-#include "mmlio/pipeline/map_accumulator.hpp"
+#include "mmlio/backend/map_accumulator.hpp"
 #include <algorithm>
 #include "sim_feed.hpp"
 
@@ -24,7 +24,7 @@ SimRun runSimulated(const std::string& scenario, double duration_s, const std::s
   so.duration_s = duration_s;
   sim::Simulator sim(so);
   SimRun run;
-  pipeline::MapAccumulator map(0.02);
+  backend::MapAccumulator map(0.02);
   pipeline::OnlinePipeline online(testing::simRigConfig(sim), mode, [&](const estimator::SweepResult& r) {
     if (r.status == estimator::SweepResult::Status::kInitializing) return;
     if (r.status == estimator::SweepResult::Status::kDegraded) ++run.degraded;

@@ -6,7 +6,7 @@
 #include <cstdio>
 
 #include "mmlio/eval/evaluation.hpp"
-#include "mmlio/pipeline/mapping_backend.hpp"
+#include "mmlio/backend/mapping_backend.hpp"
 #include "mmlio/pipeline/odometry_setup.hpp"
 #include "mmlio/sim/map_score.hpp"
 #include "sim_feed.hpp"
@@ -34,7 +34,7 @@ PeopleRun runCorridor(int people, bool handle_dynamic, double duration_s = 25.0)
   cfg.estimator.dynamic.enabled = handle_dynamic;
   cfg.mapping.clean_map = handle_dynamic;
   cfg.mapping.loop_enabled = false;
-  pipeline::MappingBackend mapping(cfg.mapping);
+  backend::MappingBackend mapping(cfg.mapping);
   Trajectory trajectory;
   PeopleRun run;
   pipeline::OnlinePipeline online(cfg, "hvi", [&](const estimator::SweepResult& r) {

@@ -1,5 +1,5 @@
 #pragma once
-// Settings of the mapping back end (pipeline::MappingBackend): loop closure, submaps, the output
+// Settings of the mapping back end (backend::MappingBackend): loop closure, submaps, the output
 // map and its ghost removal. Here, beside the loop closer, so the rig config can bind them from
 // YAML without depending on the pipeline.
 #include "mmlio/backend/loop_closer.hpp"

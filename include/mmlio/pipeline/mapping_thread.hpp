@@ -12,14 +12,14 @@
 #include <mutex>
 #include <thread>
 
-#include "mmlio/pipeline/mapping_backend.hpp"
+#include "mmlio/backend/mapping_backend.hpp"
 #include "mmlio/pipeline/stage_stats.hpp"
 
 namespace mmlio::pipeline {
 
 class MappingThread {
  public:
-  explicit MappingThread(MappingBackend::Config cfg, std::size_t capacity = 16);
+  explicit MappingThread(backend::MappingBackend::Config cfg, std::size_t capacity = 16);
   ~MappingThread();
   MappingThread(const MappingThread&) = delete;
   MappingThread& operator=(const MappingThread&) = delete;
@@ -28,9 +28,9 @@ class MappingThread {
   void addSweep(estimator::SweepResult sweep);
   /// Waits until every queued sweep is processed, stops the thread and runs the back end's final
   /// loop check. Rethrows what the back end threw. The back end may be read afterwards.
-  MappingBackend& finish();
+  backend::MappingBackend& finish();
   /// The back end itself; read it only after finish() (also when finish() threw).
-  MappingBackend& backend() { return backend_; }
+  backend::MappingBackend& backend() { return backend_; }
   /// Milliseconds the back end spent per sweep (on its own thread); a copy, safe while running.
   StageStats timing() const;
   /// Most sweeps queued at once (at most the capacity) and the capacity.
@@ -40,15 +40,15 @@ class MappingThread {
   /// (corrected path, map); the back end waits meanwhile.
   template <class F> auto read(F&& f) const {
     std::lock_guard<std::mutex> lock(backend_mutex_);
-    return f(static_cast<const MappingBackend&>(backend_));
+    return f(static_cast<const backend::MappingBackend&>(backend_));
   }
 
  private:
   void run();
 
-  const MappingBackend::Config cfg_;
+  const backend::MappingBackend::Config cfg_;
   std::size_t handed_ = 0;  // sweeps queued so far (the producer's count)
-  MappingBackend backend_;
+  backend::MappingBackend backend_;
   std::size_t capacity_;
   static constexpr std::size_t kTrimEveryKeyframes = 10;
   std::size_t keyframes_ = 0;  // seen by the worker

@@ -14,7 +14,7 @@
 #include "mmlio/io/decode_stats.hpp"
 #include "mmlio/pipeline/imu_gate.hpp"
 #include "mmlio/pipeline/json.hpp"
-#include "mmlio/pipeline/loop_figures.hpp"
+#include "mmlio/backend/loop_figures.hpp"
 #include "mmlio/pipeline/stage_stats.hpp"
 
 namespace mmlio::pipeline {
@@ -86,7 +86,7 @@ struct RunReport {
   std::map<std::string, LidarFigures> features;
   StageStats timing, timing_backend;
   double wall_time_s = 0.0, realtime_factor = 0.0;
-  LoopFigures mapping;
+  backend::LoopFigures mapping;
   std::string mapping_error;  // why the back end stopped, if it failed
   Dynamic dynamic;
   Memory memory;

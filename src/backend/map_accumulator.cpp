@@ -1,4 +1,4 @@
-#include "mmlio/pipeline/map_accumulator.hpp"
+#include "mmlio/backend/map_accumulator.hpp"
 
 #include <tbb/parallel_sort.h>
 
@@ -7,7 +7,7 @@
 
 #include "mmlio/core/voxel_key.hpp"
 
-namespace mmlio::pipeline {
+namespace mmlio::backend {
 namespace {
 
 // A voxel's output point, by MapAccumulator and mergeIntoVoxels alike (their results must agree
@@ -140,4 +140,4 @@ std::vector<Point> mergeIntoVoxels(const std::vector<PosedPoints>& clouds, doubl
   return voxels;
 }
 
-}  // namespace mmlio::pipeline
+}  // namespace mmlio::backend

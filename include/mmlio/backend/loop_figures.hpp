@@ -3,7 +3,7 @@
 #include <cstddef>
 #include <vector>
 
-namespace mmlio::pipeline {
+namespace mmlio::backend {
 
 /// A loop closed into the pose graph; times in seconds since the first keyframe.
 struct ClosedLoop {
@@ -19,4 +19,4 @@ struct LoopFigures {
   std::vector<ClosedLoop> loops;
 };
 
-}  // namespace mmlio::pipeline
+}  // namespace mmlio::backend

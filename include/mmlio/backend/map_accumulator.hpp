@@ -8,7 +8,7 @@
 #include "mmlio/core/flat_key_index.hpp"
 #include "mmlio/core/types.hpp"
 
-namespace mmlio::pipeline {
+namespace mmlio::backend {
 
 class MapAccumulator {
  public:
@@ -46,4 +46,4 @@ struct PosedPoints {
 /// voxels, whose hash cells and index took 300-400 MB more than the map itself).
 std::vector<Point> mergeIntoVoxels(const std::vector<PosedPoints>& clouds, double leaf_m);
 
-}  // namespace mmlio::pipeline
+}  // namespace mmlio::backend

@@ -1,4 +1,4 @@
-#include "mmlio/pipeline/mapping_backend.hpp"
+#include "mmlio/backend/mapping_backend.hpp"
 
 #include <tbb/parallel_for.h>
 
@@ -9,7 +9,7 @@
 #include "mmlio/core/log.hpp"
 #include "mmlio/core/voxel_key.hpp"
 
-namespace mmlio::pipeline {
+namespace mmlio::backend {
 namespace {
 
 constexpr double kMovedCellM = 0.5;
@@ -368,4 +368,4 @@ LoopFigures MappingBackend::loopFigures() const {
   return {cfg_.loop_enabled, graph_.size(), loop_attempts_, graph_.loops(), rejected_, loops_};
 }
 
-}  // namespace mmlio::pipeline
+}  // namespace mmlio::backend

@@ -2,9 +2,9 @@
 
 #include <random>
 
-#include "mmlio/pipeline/map_accumulator.hpp"
+#include "mmlio/backend/map_accumulator.hpp"
 
-namespace mmlio::pipeline {
+namespace mmlio::backend {
 
 TEST(MapAccumulator, AveragesPointsPerVoxelInTheWorldFrame) {
   MapAccumulator map(0.1);
@@ -79,4 +79,4 @@ TEST(MapAccumulator, MergingBySortedKeysGivesTheAccumulatorsPointsBitForBit) {
   EXPECT_TRUE(mergeIntoVoxels({}, 0.05).empty());
 }
 
-}  // namespace mmlio::pipeline
+}  // namespace mmlio::backend

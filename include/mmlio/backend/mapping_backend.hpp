@@ -13,14 +13,14 @@
 #include "mmlio/backend/pose_graph.hpp"
 #include "mmlio/core/flat_key_index.hpp"
 #include "mmlio/estimator/odometry.hpp"
-#include "mmlio/pipeline/loop_figures.hpp"
-#include "mmlio/pipeline/map_accumulator.hpp"
+#include "mmlio/backend/loop_figures.hpp"
+#include "mmlio/backend/map_accumulator.hpp"
 
-namespace mmlio::pipeline {
+namespace mmlio::backend {
 
 class MappingBackend {
  public:
-  using Config = backend::MappingConfig;
+  using Config = MappingConfig;
 
   /// What the ghost removal did so far.
   struct GhostRemoval {
@@ -105,4 +105,4 @@ class MappingBackend {
   std::vector<Point> strided_;  // scratch
 };
 
-}  // namespace mmlio::pipeline
+}  // namespace mmlio::backend
