@@ -5,6 +5,8 @@
 # Usage: scripts/tidy.sh [FILE...]   (default: every library source)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# Debian's run-clang-tidy is a python3 script: the system one, not a pyenv shim first on PATH.
+export PATH="/usr/bin:/bin:$PATH"
 [ -f build/compile_commands.json ] || { echo "tidy: build/compile_commands.json missing: run scripts/build.sh" >&2; exit 1; }
 if [ $# -gt 0 ]; then files=("$@"); else mapfile -t files < <(git ls-files 'src/*.cpp' 2>/dev/null || find src -name '*.cpp' | sort); fi
 # run-clang-tidy prints every file's command; its exit code says whether any finding was an error.
