@@ -13,10 +13,10 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "mmlio/core/error.hpp"
-#include "mmlio/core/timer.hpp"
 #include "mmlio/config/calib_file.hpp"
 #include "mmlio/config/rig_config.hpp"
+#include "mmlio/core/error.hpp"
+#include "mmlio/core/timer.hpp"
 #include "mmlio/pipeline/runner.hpp"
 
 namespace mmlio::apps {

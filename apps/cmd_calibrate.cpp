@@ -5,9 +5,9 @@
 #include <memory>
 
 #include "commands.hpp"
-#include "mmlio/core/log.hpp"
 #include "mmlio/config/calib_file.hpp"
 #include "mmlio/config/rig_config.hpp"
+#include "mmlio/core/log.hpp"
 #include "mmlio/pipeline/bag_calibration.hpp"
 
 namespace mmlio::apps {

@@ -4,8 +4,8 @@
 #include <memory>
 
 #include "commands.hpp"
-#include "mmlio/core/error.hpp"
 #include "mmlio/config/rig_config.hpp"
+#include "mmlio/core/error.hpp"
 
 namespace mmlio::apps {
 namespace {

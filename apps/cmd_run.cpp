@@ -8,11 +8,11 @@
 #include <memory>
 
 #include "commands.hpp"
-#include "mmlio/core/error.hpp"
-#include "mmlio/core/log.hpp"
 #include "mmlio/config/calib_file.hpp"
 #include "mmlio/config/calibration_source.hpp"
 #include "mmlio/config/rig_config.hpp"
+#include "mmlio/core/error.hpp"
+#include "mmlio/core/log.hpp"
 #include "mmlio/pipeline/bag_calibration.hpp"
 #include "mmlio/pipeline/runner.hpp"
 

@@ -9,11 +9,11 @@
 #include <string>
 
 #include "commands.hpp"
+#include "mmlio/config/calib_file.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
 #include "mmlio/core/timer.hpp"
 #include "mmlio/io/bag_writer.hpp"
-#include "mmlio/config/calib_file.hpp"
 #include "mmlio/io/trajectory_writer.hpp"
 #include "mmlio/pipeline/progress.hpp"
 #include "mmlio/sim/simulator.hpp"

@@ -5,12 +5,12 @@
 #include <random>
 
 #include "../tests/lidar/synthetic_scans.hpp"
+#include "mmlio/backend/map_accumulator.hpp"
 #include "mmlio/lidar/deskew.hpp"
 #include "mmlio/lidar/features.hpp"
 #include "mmlio/lidar/voxel_filter.hpp"
 #include "mmlio/map/range_image.hpp"
 #include "mmlio/map/voxel_hash_map.hpp"
-#include "mmlio/backend/map_accumulator.hpp"
 
 namespace {
 

@@ -22,13 +22,13 @@
 
 #include "bounded_queue.hpp"
 #include "imu_unit_gate.hpp"
+#include "mmlio/config/calibration_source.hpp"
+#include "mmlio/config/rig_config.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
 #include "mmlio/core/so3.hpp"
-#include "mmlio/config/calibration_source.hpp"
 #include "mmlio/io/cloud_decoders.hpp"
 #include "mmlio/io/livox_msg.hpp"
-#include "mmlio/config/rig_config.hpp"
 #include "mmlio/pipeline/system.hpp"
 #include "ros_messages.hpp"
 

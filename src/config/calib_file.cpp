@@ -2,9 +2,9 @@
 
 #include <fstream>
 
+#include "mmlio/config/yaml_binder.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/io/trajectory_writer.hpp"
-#include "mmlio/config/yaml_binder.hpp"
 
 namespace mmlio::config {
 

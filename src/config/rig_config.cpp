@@ -5,9 +5,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "mmlio/config/yaml_binder.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
-#include "mmlio/config/yaml_binder.hpp"
 
 namespace mmlio::config {
 

@@ -1,6 +1,5 @@
 #include "mmlio/estimator/odometry.hpp"
 
-#include <algorithm>
 #include <limits>
 
 #include "mmlio/core/log.hpp"

@@ -7,7 +7,6 @@
 #include <string>
 #include <vector>
 
-#include "mmlio/core/log.hpp"
 #include "mmlio/estimator/degeneracy.hpp"
 #include "mmlio/estimator/feature_budget.hpp"
 #include "mmlio/estimator/free_space.hpp"

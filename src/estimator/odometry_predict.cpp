@@ -2,6 +2,7 @@
 // over the sweep, the last motion carried on.
 #include <algorithm>
 
+#include "mmlio/core/log.hpp"
 #include "mmlio/core/so3.hpp"
 #include "mmlio/imu/imu_integrator.hpp"
 #include "odometry_impl.hpp"

@@ -1,10 +1,10 @@
 #include "mmlio/pipeline/bag_calibration.hpp"
-#include "mmlio/config/source_options.hpp"
 
 #include <cmath>
 #include <deque>
 #include <sstream>
 
+#include "mmlio/config/source_options.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
 #include "mmlio/io/bag_source.hpp"

@@ -1,5 +1,4 @@
 #include "mmlio/pipeline/runner.hpp"
-#include "mmlio/config/source_options.hpp"
 
 #include <cstdio>
 #include <limits>
@@ -8,6 +7,7 @@
 #include <memory>
 #include <sstream>
 
+#include "mmlio/config/source_options.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
 #include "mmlio/core/timer.hpp"

@@ -8,12 +8,12 @@
 #include <set>
 #include <sstream>
 
-#include "mmlio/core/error.hpp"
-#include "mmlio/core/log.hpp"
+#include "../common/error_of.hpp"
 #include "mmlio/config/calib_file.hpp"
 #include "mmlio/config/rig_config.hpp"
 #include "mmlio/config/yaml_binder.hpp"
-#include "../common/error_of.hpp"
+#include "mmlio/core/error.hpp"
+#include "mmlio/core/log.hpp"
 
 namespace fs = std::filesystem;
 using namespace mmlio;

@@ -12,11 +12,11 @@
 #include <fstream>
 #include <unistd.h>
 
+#include "../common/error_of.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/io/bag_info.hpp"
 #include "mmlio/io/bag_source.hpp"
 #include "mmlio/io/bag_writer.hpp"
-#include "../common/error_of.hpp"
 
 namespace mmlio::io {
 namespace {

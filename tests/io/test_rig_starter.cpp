@@ -7,11 +7,11 @@
 
 #include <filesystem>
 
-#include "cloud_builder.hpp"
 #include "../common/error_of.hpp"
+#include "cloud_builder.hpp"
+#include "mmlio/config/rig_config.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/io/bag_info.hpp"
-#include "mmlio/config/rig_config.hpp"
 #include "mmlio/io/rig_starter.hpp"
 
 namespace mmlio::io {

@@ -9,8 +9,8 @@
 #include <filesystem>
 
 #include "../pipeline/sim_feed.hpp"
-#include "mmlio/core/error.hpp"
 #include "mmlio/config/source_options.hpp"
+#include "mmlio/core/error.hpp"
 #include "mmlio/io/bag_info.hpp"
 #include "mmlio/io/bag_source.hpp"
 #include "mmlio/pipeline/runner.hpp"

@@ -12,10 +12,10 @@
 #include <fstream>
 #include <sstream>
 
+#include "../common/error_of.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/io/pcd_io.hpp"
 #include "mmlio/io/trajectory_writer.hpp"
-#include "../common/error_of.hpp"
 
 namespace fs = std::filesystem;
 using namespace mmlio;

@@ -6,8 +6,8 @@
 #include <limits>
 #include <string>
 
-#include "mmlio/io/bag_writer.hpp"
 #include "mmlio/config/rig_config.hpp"
+#include "mmlio/io/bag_writer.hpp"
 #include "mmlio/pipeline/online_pipeline.hpp"
 #include "mmlio/sim/simulator.hpp"
 

@@ -12,9 +12,9 @@
 #include <limits>
 #include <thread>
 
-#include "mmlio/eval/evaluation.hpp"
-#include "mmlio/core/error.hpp"
 #include "mmlio/config/rig_config.hpp"
+#include "mmlio/core/error.hpp"
+#include "mmlio/eval/evaluation.hpp"
 #include "mmlio/pipeline/imu_gate.hpp"
 #include "mmlio/pipeline/runner.hpp"
 #include "mmlio/pipeline/system.hpp"

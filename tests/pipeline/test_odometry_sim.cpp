@@ -2,8 +2,8 @@
 
 #include <cstdlib>
 
-#include "mmlio/eval/evaluation.hpp"
 #include "mmlio/backend/map_accumulator.hpp"
+#include "mmlio/eval/evaluation.hpp"
 #include <algorithm>
 #include "sim_feed.hpp"
 

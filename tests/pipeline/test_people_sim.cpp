@@ -5,8 +5,8 @@
 
 #include <cstdio>
 
-#include "mmlio/eval/evaluation.hpp"
 #include "mmlio/backend/mapping_backend.hpp"
+#include "mmlio/eval/evaluation.hpp"
 #include "mmlio/pipeline/odometry_setup.hpp"
 #include "mmlio/sim/map_score.hpp"
 #include "sim_feed.hpp"

@@ -9,12 +9,12 @@
 #include <vector>
 
 #include "mmlio/backend/loop_closer.hpp"
+#include "mmlio/backend/loop_figures.hpp"
+#include "mmlio/backend/map_accumulator.hpp"
 #include "mmlio/backend/mapping_config.hpp"
 #include "mmlio/backend/pose_graph.hpp"
 #include "mmlio/core/flat_key_index.hpp"
 #include "mmlio/estimator/odometry.hpp"
-#include "mmlio/backend/loop_figures.hpp"
-#include "mmlio/backend/map_accumulator.hpp"
 
 namespace mmlio::backend {
 

@@ -13,9 +13,9 @@
 #include <vector>
 
 #include "mmlio/backend/mapping_config.hpp"
+#include "mmlio/config/calib_file.hpp"
 #include "mmlio/core/types.hpp"
 #include "mmlio/estimator/odometry.hpp"
-#include "mmlio/config/calib_file.hpp"
 
 namespace mmlio::config {
 

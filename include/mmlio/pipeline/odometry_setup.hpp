@@ -3,8 +3,8 @@
 #include <string>
 #include <vector>
 
-#include "mmlio/estimator/odometry.hpp"
 #include "mmlio/config/rig_config.hpp"
+#include "mmlio/estimator/odometry.hpp"
 
 namespace mmlio::pipeline {
 

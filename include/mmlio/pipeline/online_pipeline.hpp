@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "mmlio/estimator/odometry.hpp"
 #include "mmlio/config/rig_config.hpp"
+#include "mmlio/estimator/odometry.hpp"
 #include "mmlio/lidar/sweep_aligner.hpp"
 #include "mmlio/pipeline/imu_gate.hpp"
 #include "mmlio/pipeline/stamp_jump_guard.hpp"

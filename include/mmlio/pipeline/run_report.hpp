@@ -9,12 +9,12 @@
 #include <string>
 #include <vector>
 
+#include "mmlio/backend/loop_figures.hpp"
 #include "mmlio/eval/evaluation.hpp"
 #include "mmlio/imu/initializer.hpp"
 #include "mmlio/io/decode_stats.hpp"
 #include "mmlio/pipeline/imu_gate.hpp"
 #include "mmlio/pipeline/json.hpp"
-#include "mmlio/backend/loop_figures.hpp"
 #include "mmlio/pipeline/stage_stats.hpp"
 
 namespace mmlio::pipeline {

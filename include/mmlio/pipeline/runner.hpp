@@ -7,8 +7,8 @@
 #include <atomic>
 #include <string>
 
-#include "mmlio/core/types.hpp"
 #include "mmlio/config/rig_config.hpp"
+#include "mmlio/core/types.hpp"
 #include "mmlio/pipeline/run_report.hpp"
 #include "mmlio/pipeline/stage_stats.hpp"
 #include "mmlio/pipeline/system.hpp"

@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "mmlio/core/timer.hpp"
 #include "mmlio/config/rig_config.hpp"
+#include "mmlio/core/timer.hpp"
 #include "mmlio/pipeline/degeneracy_tally.hpp"
 #include "mmlio/pipeline/mapping_thread.hpp"
 #include "mmlio/pipeline/online_pipeline.hpp"
