@@ -21,6 +21,15 @@ std::uint64_t cellKey(const Eigen::Vector3d& p, int dx = 0, int dy = 0, int dz =
   return voxelKeyOf(p, kMovedCellM, dx, dy, dz);
 }
 
+estimator::SweepView withoutWindows(const estimator::SweepView& view) {
+  estimator::SweepView kept;
+  kept.stamp_ns = view.stamp_ns;
+  kept.sensors.reserve(view.sensors.size());
+  for (const estimator::SensorView& s : view.sensors)
+    kept.sensors.push_back({s.source, s.T_body_sensor, s.T_sensor_world, s.image.withoutWindows()});
+  return kept;
+}
+
 }  // namespace
 
 MappingBackend::MappingBackend(Config cfg) : cfg_(std::move(cfg)), dynamic_(cfg_.map_leaf_m) {
@@ -94,7 +103,7 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
       node.cloud_body = map::voxelCentroids(pts, cfg_.loop_cloud_voxel_m);
     }
     const int k = graph_.addKeyframe(std::move(node));
-    if (cfg_.clean_map && sweep.view) views_[static_cast<std::size_t>(k)] = sweep.view;
+    if (cfg_.clean_map && sweep.view) views_[static_cast<std::size_t>(k)] = withoutWindows(*sweep.view);
     closeSubmap();
     judgeSubmaps(false);
     submaps_.emplace_back();
@@ -246,6 +255,15 @@ void MappingBackend::judgeSubmaps(bool all) {
 
 bool MappingBackend::nearMoved(const Eigen::Vector3d& world) const { return moved_cells_.contains(cellKey(world)); }
 
+bool MappingBackend::nearAMover(std::size_t submap) const {
+  if (moved_cells_.empty()) return false;
+  const Eigen::Isometry3d T_world_keyframe = graph_.pose(static_cast<int>(submap));
+  for (const auto& [lidar, points] : submaps_[submap])
+    for (const Point& p : points)
+      if (nearMoved(T_world_keyframe * p.xyz.cast<double>())) return true;
+  return false;
+}
+
 std::uint32_t MappingBackend::moverReturns(const Eigen::Vector3d& world) const {
   const std::uint32_t c = mover_index_.find(cellKey(world));
   return c == FlatKeyIndex::kNone ? 0 : mover_returns_[c];
@@ -261,15 +279,17 @@ void MappingBackend::removeGhosts(std::size_t submap) {
   struct Group {  // a keyframe's eyes: eyes[begin, end)
     std::size_t begin, end, keyframe;
   };
+  // Only points near a mover are judged: a submap with none needs no view.
+  if (!nearAMover(submap)) return;
   const std::size_t reach = static_cast<std::size_t>(std::max(0, cfg_.ghost_keyframes));
   std::vector<Eye> eyes;
   std::vector<Group> groups;
   for (auto it = views_.lower_bound(submap > reach ? submap - reach : 0);
        it != views_.end() && it->first <= submap + reach; ++it) {
-    if (!it->second || static_cast<int>(it->first) >= static_cast<int>(graph_.size())) continue;
+    if (static_cast<int>(it->first) >= static_cast<int>(graph_.size())) continue;
     const Eigen::Isometry3d T_world_body = graph_.pose(static_cast<int>(it->first));
     const std::size_t begin = eyes.size();
-    for (const estimator::SensorView& s : it->second->sensors) {
+    for (const estimator::SensorView& s : it->second.sensors) {
       const Eigen::Isometry3d T_world_sensor = T_world_body * s.T_body_sensor;
       eyes.push_back({&s.image, T_world_sensor.inverse(), T_world_sensor.translation()});
     }

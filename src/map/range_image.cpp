@@ -100,6 +100,36 @@ RangeImage::RangeImage(const std::vector<Point>& points, const RangeImageConfig&
   summariseWindows();
 }
 
+RangeImage RangeImage::withoutWindows() const {
+  RangeImage copy = *this;  // once per keyframe: copying the windows to free them costs less than listing every field
+  copy.windows_.clear();
+  copy.windows_.shrink_to_fit();
+  return copy;
+}
+
+std::uint16_t RangeImage::windowAt(int arc_col, int row) const {
+  // summariseWindows for one window, in the same terms.
+  const int wr = cfg_.window_rows, wc = cfg_.window_cols;
+  constexpr std::uint16_t kNone = 0xffff;
+  constexpr std::uint8_t kBelow = 1, kAbove = 2, kLeft = 4, kRight = 8, kAll = kBelow | kAbove | kLeft | kRight;
+  std::uint16_t nearest = kNone;
+  std::uint8_t sides = 0;
+  for (int dc = -wc; dc <= wc; ++dc) {
+    const int x = (arc_col + dc + 2 * circle_cols_) % circle_cols_;
+    if (x >= cols_) continue;
+    const auto lr = static_cast<std::uint8_t>((dc <= 0 ? kLeft : 0) | (dc >= 0 ? kRight : 0));
+    for (int y = std::max(0, row - wr); y <= std::min(rows_ - 1, row + wr); ++y) {
+      const int slot = slot_of_row_[static_cast<std::size_t>(y)];
+      if (slot < 0) continue;
+      const std::uint16_t cm = ranges_[rangeIndex(slot, x)];
+      if (cm == 0) continue;
+      nearest = std::min(nearest, std::min(cm, kNearestMask));
+      sides |= static_cast<std::uint8_t>(lr | (row <= y ? kAbove : 0) | (row >= y ? kBelow : 0));
+    }
+  }
+  return static_cast<std::uint16_t>((nearest == kNone ? 0 : nearest) | (sides == kAll ? kSurrounded : 0));
+}
+
 int RangeImage::windowColumn(int arc_col) const {
   const int wc = cfg_.window_cols;
   if (window_width_ == circle_cols_) return arc_col;  // the windows reach round the whole circle
@@ -194,8 +224,10 @@ Visibility RangeImage::classify(const Eigen::Vector3d& p) const {
   const int arc_col = (colOf(p) - col0_ + circle_cols_) % circle_cols_;
   const int j = windowColumn(arc_col);
   if (j < 0) return Visibility::kUnknown;
-  const std::uint16_t window = windows_[static_cast<std::size_t>(j) * static_cast<std::size_t>(rows_ + 2 * wr) +
-                                        static_cast<std::size_t>(row + wr)];
+  const std::uint16_t window = windows_.empty()
+                                   ? windowAt(arc_col, row)
+                                   : windows_[static_cast<std::size_t>(j) * static_cast<std::size_t>(rows_ + 2 * wr) +
+                                              static_cast<std::size_t>(row + wr)];
   if ((window & kNearestMask) == 0) return Visibility::kUnknown;
   const double nearest = 0.01 * (window & kNearestMask);
   if ((window & kSurrounded) && r < nearest - (cfg_.margin_m + cfg_.margin_fraction * r)) return Visibility::kFree;

@@ -82,8 +82,10 @@ class MappingBackend {
   std::vector<Point> mergedMap(const std::string* only_lidar) const;
   void judgeSubmaps(bool all);
   void removeGhosts(std::size_t submap);
-  // Keyframe views still needed by a submap not yet judged, by keyframe index (may be null).
-  std::map<std::size_t, std::shared_ptr<const estimator::SweepView>> views_;
+  // Keyframe views still needed by a submap not yet judged, by keyframe index, without their
+  // images' window summaries (few of their pixels are ever asked about).
+  std::map<std::size_t, estimator::SweepView> views_;
+  bool nearAMover(std::size_t submap) const;
   std::size_t judged_ = 0;  // submaps [0, judged_) are judged
   // World cells (and their neighbours) where the odometry saw something move: only map points in
   // them are judged (nearly all of a map is static and never near a mover).

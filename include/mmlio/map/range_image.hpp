@@ -46,6 +46,10 @@ class RangeImage {
 
   Visibility classify(const Eigen::Vector3d& p_sensor) const;
   bool empty() const { return ranges_.empty(); }
+  /// A copy without the window summaries: the same answers from a fifth of a spinning LiDAR's
+  /// memory, each read from the window's pixels (several times slower). For views kept in case
+  /// they are asked (the map's ghost removal asks only about points near something that moved).
+  RangeImage withoutWindows() const;
   std::size_t memoryBytes() const {
     return ranges_.size() * sizeof(ranges_[0]) + slot_of_row_.size() * sizeof(slot_of_row_[0]) +
            windows_.size() * sizeof(windows_[0]);
@@ -63,6 +67,9 @@ class RangeImage {
     return static_cast<std::size_t>(slot) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(x);
   }
   void summariseWindows();
+  /// What windows_ holds for window row `row` (relative to row0_) around stored column arc_col,
+  /// read from ranges_.
+  std::uint16_t windowAt(int arc_col, int row) const;
 
   RangeImageConfig cfg_;
   double inv_res_ = 1.0;
