@@ -56,6 +56,11 @@ LoopCloser::LoopCloser(Config cfg) : cfg_(std::move(cfg)) {
   icp_.voxel_fine_m = cfg_.submap_voxel_m;
 }
 
+void LoopCloser::forget(int keyframe) {
+  if (keyframe >= 0 && static_cast<std::size_t>(keyframe) < descriptors_.size())
+    descriptors_[static_cast<std::size_t>(keyframe)].reset();
+}
+
 const ScanContext& LoopCloser::descriptor(const PoseGraph& graph, int i) const {
   if (descriptors_.size() < graph.size()) descriptors_.resize(graph.size());
   auto& slot = descriptors_[static_cast<std::size_t>(i)];

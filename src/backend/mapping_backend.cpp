@@ -218,8 +218,10 @@ void MappingBackend::closeSubmap() {
   // its loop cloud would only duplicate theirs as a candidate, so it is freed (the last keyframe,
   // still open, keeps its cloud for the end-of-run loop check).
   const int k = static_cast<int>(submaps_.size()) - 1;
-  if (cfg_.dedupe_revisits && leaf > 0.0 && k > 0 && seen > 0 && new_voxels < cfg_.revisit_new_fraction * seen)
+  if (cfg_.dedupe_revisits && leaf > 0.0 && k > 0 && seen > 0 && new_voxels < cfg_.revisit_new_fraction * seen) {
     graph_.dropCloud(k);
+    if (closer_) closer_->forget(k);
+  }
 }
 
 std::vector<Point> MappingBackend::mergedMap(const std::string* only_lidar) const {

@@ -74,6 +74,8 @@ class LoopCloser {
   /// Looks for a loop from keyframe `query` to an older keyframe of `graph`. Caches descriptors by
   /// keyframe index, so one LoopCloser serves one graph (not thread-safe).
   LoopResult detect(const PoseGraph& graph, int query) const;
+  /// Frees the cached descriptor of a keyframe that is no loop candidate any more (its cloud dropped).
+  void forget(int keyframe);
 
   const Config& config() const { return cfg_; }
 

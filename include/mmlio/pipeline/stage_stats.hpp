@@ -1,5 +1,7 @@
 #pragma once
 // Per-stage timing statistics over a run: mean, 95th and 99th percentile and maximum ms per sweep.
+// A run of any length keeps the same few kilobytes: percentiles come from bins 1 % wide.
+#include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
@@ -15,6 +17,7 @@ class StageStats {
   void add(const StageTimes& times);
   std::size_t sweeps() const { return sweeps_; }
   double meanMs(const std::string& stage) const;
+  /// Nearest-rank percentiles, to within 1 % (the upper edge of the sample's bin, at most the maximum).
   double p95Ms(const std::string& stage) const;
   double p99Ms(const std::string& stage) const;
   double maxMs(const std::string& stage) const;
@@ -26,8 +29,19 @@ class StageStats {
   std::string table() const;
 
  private:
+  /// One stage's times: count, sum and maximum exact, the distribution in bins whose edges grow
+  /// by 1 % from 1 us to 1000 s.
+  struct Histogram {
+    std::size_t count = 0;
+    double sum_ms = 0.0, max_ms = 0.0;
+    std::vector<std::uint32_t> bins;  // allocated by the first sample
+    void add(double ms);
+    double quantile(double q) const;
+  };
+  const Histogram* find(const std::string& stage) const;
+
   std::vector<std::string> order_;
-  std::map<std::string, std::vector<double>> samples_;
+  std::map<std::string, Histogram> stages_;
   std::size_t sweeps_ = 0;
 };
 
