@@ -157,7 +157,7 @@ class Node {
   void finish() {
     queue_.close();
     if (worker_.joinable()) worker_.join();
-    log::info(system_.sweepsProcessed(), " sweeps, ", system_.odometryTrajectory().size(), " poses, ", system_.loops(),
+    log::info(system_.sweepsProcessed(), " sweeps, ", system_.posesTracked(), " poses, ", system_.loops(),
               " loops; dropped ", queue_.dropped(kImuClass), " IMU and ", queue_.dropped(kScanClass),
               " LiDAR messages (queue full)");
     if (params_.out_dir.empty()) return;
@@ -321,7 +321,7 @@ class Node {
 
   /// Processing thread: trajectory.tum, map.pcd, report.json/.md into out_dir. "" or the error.
   std::string save() {
-    if (system_.odometryTrajectory().empty()) return "no pose estimated yet: nothing written";
+    if (system_.posesTracked() == 0) return "no pose estimated yet: nothing written";
     try {
       pipeline::RunReport report = system_.report();
       report.input.source = "live";
@@ -329,7 +329,7 @@ class Node {
       report.input.imu_acc_scale = imu_gate_.decided() ? imu_gate_.accScale() : 1.0;
       report.input.queue_dropped_imu = queue_.dropped(kImuClass);
       report.input.queue_dropped_scans = queue_.dropped(kScanClass);
-      const Trajectory& odometry = system_.odometryTrajectory();
+      const Trajectory odometry = system_.odometryTrajectory();
       report.input.duration_s = toSec(odometry.back().stamp_ns - odometry.front().stamp_ns);
       report.status = report.inputStatus();
       report = system_.writeOutputs(params_.out_dir, std::move(report));

@@ -101,6 +101,7 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
       pts.reserve(sweep.points_body.size());
       for (const Point& p : sweep.points_body) pts.emplace_back(p.xyz.cast<double>());
       node.cloud_body = map::voxelCentroids(pts, cfg_.loop_cloud_voxel_m);
+      node.cloud_body.shrink_to_fit();  // kept for the run: without the slack of its growth
     }
     const int k = graph_.addKeyframe(std::move(node));
     if (cfg_.clean_map && sweep.view) views_[static_cast<std::size_t>(k)] = withoutWindows(*sweep.view);
@@ -164,16 +165,18 @@ MapAccumulator& MappingBackend::openAccumulator(const std::string& key) {
 }
 
 Trajectory MappingBackend::correctedTrajectory() const {
-  if (graph_.loops() == 0) return odometry_;
+  if (graph_.loops() == 0) return odometry_.trajectory();
   Trajectory out;
   out.reserve(odometry_.size());
-  for (const auto& p : odometry_) out.push_back({p.stamp_ns, graph_.correct(p.stamp_ns, p.T_world_body)});
+  odometry_.forEach([&](const StampedPose& p) {
+    out.push_back({p.stamp_ns, graph_.correct(p.stamp_ns, p.T_world_body)});
+  });
   return out;
 }
 
 Eigen::Isometry3d MappingBackend::correction() const {
   if (graph_.loops() == 0 || odometry_.empty()) return Eigen::Isometry3d::Identity();
-  const StampedPose& last = odometry_.back();
+  const StampedPose last = odometry_.back();
   return graph_.correct(last.stamp_ns, last.T_world_body) * last.T_world_body.inverse();
 }
 

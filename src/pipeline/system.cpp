@@ -164,7 +164,7 @@ RunReport System::report(Stamp stream_end_ns, const TrustLimits& limits) const {
 // Trust: the stream after initialisation is covered by poses, few of them were degraded, and the
 // IMU never carried the position alone long enough to drift far.
 void System::judgeTrust(RunReport* r, Stamp stream_end_ns, const TrustLimits& limits) const {
-  const Trajectory& poses = odometry_poses_;
+  const PoseLog& poses = odometry_poses_;
   if (poses.empty()) return;
   const double span_s = toSec(stream_end_ns - poses.front().stamp_ns);
   // The last sweep may end just past the stream's end (a --duration cut): never more than all of it covered.
@@ -205,7 +205,7 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
   report.dynamic.dynamic_map_points = dynamic_map.size();
 
   io::writeTum(dir + "trajectory.tum", trajectory);
-  io::writeTum(dir + "trajectory_odometry.tum", odometry_poses_);  // before loop correction
+  io::writeTum(dir + "trajectory_odometry.tum", odometry_poses_.trajectory());  // before loop correction
   if (cfg_.output.write_kitti) {
     io::writeKitti(dir + "trajectory.kitti", trajectory);
     io::writeKittiTimes(dir + "times.txt", trajectory);

@@ -14,6 +14,7 @@
 #include "mmlio/backend/mapping_config.hpp"
 #include "mmlio/backend/pose_graph.hpp"
 #include "mmlio/core/flat_key_index.hpp"
+#include "mmlio/core/pose_log.hpp"
 #include "mmlio/estimator/odometry.hpp"
 
 namespace mmlio::backend {
@@ -97,7 +98,7 @@ class MappingBackend {
   std::uint32_t moverReturns(const Eigen::Vector3d& world) const;
   GhostRemoval ghosts_;
   MapAccumulator dynamic_;  // world frame, at the poses of the moment (map_leaf_m)
-  Trajectory odometry_;
+  PoseLog odometry_;
   Eigen::Isometry3d T_world_keyframe_ = Eigen::Isometry3d::Identity();
   std::size_t loop_attempts_ = 0;
   int last_checked_ = -1;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "mmlio/config/rig_config.hpp"
+#include "mmlio/core/pose_log.hpp"
 #include "mmlio/core/timer.hpp"
 #include "mmlio/pipeline/degeneracy_tally.hpp"
 #include "mmlio/pipeline/mapping_thread.hpp"
@@ -53,7 +54,8 @@ class System {
   void finish();
 
   /// Odometry poses (IMU frame, one per tracked sweep), not corrected by loops.
-  const Trajectory& odometryTrajectory() const { return odometry_poses_; }
+  Trajectory odometryTrajectory() const { return odometry_poses_.trajectory(); }
+  std::size_t posesTracked() const { return odometry_poses_.size(); }
   /// The same poses corrected by the loops closed so far.
   Trajectory trajectory() const;
   /// Loop correction at the newest pose, map <- odom (identity before the first loop).
@@ -96,7 +98,7 @@ class System {
   std::map<std::string, RunReport::LidarFigures> lidars_;
   StageStats timing_;
   std::vector<RunReport::SweepSample> timeline_;
-  Trajectory odometry_poses_;
+  PoseLog odometry_poses_;
   Stamp first_imu_ns_ = 0;
   std::string backend_error_;
   bool finished_ = false;
