@@ -1,0 +1,173 @@
+#include "dds_transport.hpp"
+
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/DataWriterListener.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+#include <fastdds/dds/topic/TopicDataType.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
+
+#include <atomic>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+
+#include "mmlio/core/error.hpp"
+
+namespace mmlio::ros2 {
+namespace dds = eprosima::fastdds::dds;
+namespace rtps = eprosima::fastrtps::rtps;
+
+namespace {
+
+/// A type whose samples are already serialised: a ROS 2 message's CDR with its encapsulation
+/// header, carried under the ROS 2 type name. What rmw does with generated code, done once here.
+class SerialisedType : public dds::TopicDataType {
+ public:
+  explicit SerialisedType(const std::string& wire_type) {
+    setName(wire_type.c_str());
+    m_typeSize = 512;  // a first guess for readers' buffers; samples are unbounded (reallocated)
+    m_isGetKeyDefined = false;
+  }
+  bool serialize(void* data, rtps::SerializedPayload_t* payload) override {
+    const Cdr& cdr = *static_cast<const Cdr*>(data);
+    if (cdr.size() < 4 || cdr.size() > payload->max_size) return false;
+    std::memcpy(payload->data, cdr.data(), cdr.size());
+    payload->length = static_cast<std::uint32_t>(cdr.size());
+    payload->encapsulation = cdr[1] == 0x01 ? CDR_LE : CDR_BE;
+    return true;
+  }
+  bool deserialize(rtps::SerializedPayload_t* payload, void* data) override {
+    Cdr& cdr = *static_cast<Cdr*>(data);
+    cdr.assign(payload->data, payload->data + payload->length);
+    return payload->length >= 4;
+  }
+  std::function<std::uint32_t()> getSerializedSizeProvider(void* data) override {
+    return [data] { return static_cast<std::uint32_t>(static_cast<const Cdr*>(data)->size()); };
+  }
+  void* createData() override { return new Cdr(); }
+  void deleteData(void* data) override { delete static_cast<Cdr*>(data); }
+  bool getKey(void*, rtps::InstanceHandle_t*, bool) override { return false; }
+};
+
+template <class EndpointQos> void apply(const Qos& q, EndpointQos* out) {
+  out->reliability().kind = q.reliable ? dds::RELIABLE_RELIABILITY_QOS : dds::BEST_EFFORT_RELIABILITY_QOS;
+  out->durability().kind = q.transient_local ? dds::TRANSIENT_LOCAL_DURABILITY_QOS : dds::VOLATILE_DURABILITY_QOS;
+  out->history().kind = dds::KEEP_LAST_HISTORY_QOS;
+  out->history().depth = q.depth;
+  // Samples of any size (point clouds), as rmw_fastrtps sets for unbounded types.
+  out->endpoint().history_memory_policy = rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+  out->data_sharing().off();
+}
+
+class FastDdsWriter : public DdsParticipant::Writer, public dds::DataWriterListener {
+ public:
+  bool write(const Cdr& message) override {
+    return writer->write(const_cast<Cdr*>(&message));  // Fast DDS takes void*; it only reads it
+  }
+  int matched() const override { return matched_.load(); }
+  void on_publication_matched(dds::DataWriter*, const dds::PublicationMatchedStatus& status) override {
+    matched_ = status.current_count;
+  }
+  dds::DataWriter* writer = nullptr;
+
+ private:
+  std::atomic<int> matched_{0};
+};
+
+class FastDdsReader : public dds::DataReaderListener {
+ public:
+  explicit FastDdsReader(DdsParticipant::OnMessage on_message) : on_message_(std::move(on_message)) {}
+  void on_data_available(dds::DataReader* reader) override {
+    Cdr sample;
+    dds::SampleInfo info;
+    while (reader->take_next_sample(&sample, &info) == ReturnCode_t::RETCODE_OK)
+      if (info.valid_data) on_message_(std::move(sample));
+  }
+
+ private:
+  DdsParticipant::OnMessage on_message_;
+};
+
+}  // namespace
+
+Qos sensorDataQos() { return {false, false, 5}; }
+Qos reliableQos(int depth) { return {true, false, depth}; }
+Qos latchedQos() { return {true, true, 1}; }
+
+int domainIdFromEnvironment() {
+  const char* env = std::getenv("ROS_DOMAIN_ID");
+  if (env == nullptr || *env == '\0') return 0;
+  char* end = nullptr;
+  const long id = std::strtol(env, &end, 10);
+  if (*end != '\0' || id < 0 || id > 232)
+    throw Error(std::string("ROS_DOMAIN_ID '") + env + "' is not a domain id from 0 to 232");
+  return static_cast<int>(id);
+}
+
+struct DdsParticipant::Impl {
+  dds::DomainParticipant* participant = nullptr;
+  dds::Publisher* publisher = nullptr;
+  dds::Subscriber* subscriber = nullptr;
+  std::map<std::string, dds::Topic*> topics;
+  std::vector<std::unique_ptr<FastDdsWriter>> writers;
+  std::vector<std::unique_ptr<FastDdsReader>> readers;
+
+  dds::Topic* topic(const std::string& wire_topic, const std::string& wire_type) {
+    if (auto it = topics.find(wire_topic); it != topics.end()) return it->second;
+    if (!participant->find_type(wire_type).empty() ||
+        dds::TypeSupport(new SerialisedType(wire_type)).register_type(participant) == ReturnCode_t::RETCODE_OK) {
+      if (dds::Topic* t = participant->create_topic(wire_topic, wire_type, dds::TOPIC_QOS_DEFAULT))
+        return topics[wire_topic] = t;
+    }
+    throw Error("DDS: cannot create topic " + wire_topic + " of type " + wire_type);
+  }
+};
+
+DdsParticipant::DdsParticipant(int domain_id, const std::string& name) : impl_(std::make_unique<Impl>()) {
+  dds::DomainParticipantQos qos = dds::PARTICIPANT_QOS_DEFAULT;
+  qos.name(name);
+  impl_->participant =
+      dds::DomainParticipantFactory::get_instance()->create_participant(static_cast<dds::DomainId_t>(domain_id), qos);
+  if (impl_->participant == nullptr) throw Error("DDS: cannot join domain " + std::to_string(domain_id));
+  impl_->publisher = impl_->participant->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
+  impl_->subscriber = impl_->participant->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
+  if (impl_->publisher == nullptr || impl_->subscriber == nullptr)
+    throw Error("DDS: cannot create a publisher and a subscriber in domain " + std::to_string(domain_id));
+}
+
+DdsParticipant::~DdsParticipant() {
+  if (impl_->participant == nullptr) return;
+  impl_->participant->delete_contained_entities();
+  dds::DomainParticipantFactory::get_instance()->delete_participant(impl_->participant);
+}
+
+DdsParticipant::Writer& DdsParticipant::writer(const std::string& wire_topic, const std::string& wire_type,
+                                               const Qos& qos) {
+  dds::DataWriterQos wq = dds::DATAWRITER_QOS_DEFAULT;
+  apply(qos, &wq);
+  wq.publish_mode().kind = dds::ASYNCHRONOUS_PUBLISH_MODE;  // large samples go out in fragments
+  auto w = std::make_unique<FastDdsWriter>();
+  w->writer = impl_->publisher->create_datawriter(impl_->topic(wire_topic, wire_type), wq, w.get());
+  if (w->writer == nullptr) throw Error("DDS: cannot create a writer of " + wire_topic);
+  impl_->writers.push_back(std::move(w));
+  return *impl_->writers.back();
+}
+
+void DdsParticipant::reader(const std::string& wire_topic, const std::string& wire_type, const Qos& qos,
+                            OnMessage on_message) {
+  dds::DataReaderQos rq = dds::DATAREADER_QOS_DEFAULT;
+  apply(qos, &rq);
+  auto r = std::make_unique<FastDdsReader>(std::move(on_message));
+  if (impl_->subscriber->create_datareader(impl_->topic(wire_topic, wire_type), rq, r.get()) == nullptr)
+    throw Error("DDS: cannot create a reader of " + wire_topic);
+  impl_->readers.push_back(std::move(r));
+}
+
+}  // namespace mmlio::ros2

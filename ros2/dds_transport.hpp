@@ -1,0 +1,61 @@
+#pragma once
+// A ROS 2 node's presence on DDS, through Debian's Fast DDS (the default RMW of Humble and Jazzy):
+// one domain participant, writers and readers of ROS 2 topics whose samples are the messages'
+// serialised CDR (ros2_wire.hpp), under ROS 2's wire names and with the QoS ROS 2 profiles map to.
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ros2_wire.hpp"
+
+namespace mmlio::ros2 {
+
+/// The QoS policies the node's endpoints differ in (rmw_fastrtps maps ROS 2's profiles to DDS
+/// one to one: reliability, durability, history keep-last depth).
+struct Qos {
+  bool reliable = true;
+  bool transient_local = false;  // late joiners get the last `depth` samples (ROS 1's latch)
+  int depth = 10;
+};
+/// rclcpp::SensorDataQoS: best effort, volatile, keep last 5 (what LiDAR and IMU drivers publish with).
+Qos sensorDataQos();
+/// rclcpp::QoS(depth): reliable, volatile.
+Qos reliableQos(int depth = 10);
+/// A map or path for late joiners: reliable, transient local, keep last 1.
+Qos latchedQos();
+
+class DdsParticipant {
+ public:
+  /// Joins DDS domain `domain_id` (ROS_DOMAIN_ID; 0-232). Throws mmlio::Error if DDS refuses.
+  explicit DdsParticipant(int domain_id, const std::string& name = "mmlio");
+  ~DdsParticipant();
+  DdsParticipant(const DdsParticipant&) = delete;
+  DdsParticipant& operator=(const DdsParticipant&) = delete;
+
+  class Writer {
+   public:
+    virtual ~Writer() = default;
+    /// Sends one serialised message (false if DDS refused it).
+    virtual bool write(const Cdr& message) = 0;
+    /// Readers currently matched (discovered, with compatible QoS).
+    virtual int matched() const = 0;
+  };
+  using OnMessage = std::function<void(Cdr&& message)>;
+
+  /// A writer of `wire_topic` ("rt/..."), samples of `wire_type` ("pkg::msg::dds_::Type_"). The
+  /// participant owns it.
+  Writer& writer(const std::string& wire_topic, const std::string& wire_type, const Qos& qos);
+  /// Calls on_message on DDS's listener thread for every sample received.
+  void reader(const std::string& wire_topic, const std::string& wire_type, const Qos& qos, OnMessage on_message);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// ROS_DOMAIN_ID from the environment (0 if unset); throws mmlio::Error if it is not 0-232.
+int domainIdFromEnvironment();
+
+}  // namespace mmlio::ros2
