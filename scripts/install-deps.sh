@@ -8,6 +8,7 @@ PACKAGES=(
   libeigen3-dev libceres-dev libtbb-dev libnanoflann-dev
   libyaml-cpp-dev libcli11-dev libgtest-dev libbenchmark-dev nlohmann-json3-dev libbz2-dev
   zlib1g-dev libsqlite3-dev libzstd-dev liblz4-dev libfastcdr-dev libfastrtps-dev
+  cyclonedds-dev cyclonedds-tools
   librosbag-storage-dev pluginlib-dev libroscpp-dev libsensor-msgs-dev libstd-msgs-dev
   libgeometry-msgs-dev libnav-msgs-dev libtf2-ros-dev libtf2-msgs-dev libstd-srvs-dev
   ros-core python3-rosbag python3-sensor-msgs python3-nav-msgs python3-tf2-msgs python3-std-srvs
