@@ -1,13 +1,12 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <chrono>
 #include <condition_variable>
 #include <mutex>
-#include <thread>
 #include <vector>
 
 #include "dds_transport.hpp"
+#include "wait_for.hpp"
 #include "mmlio/core/error.hpp"
 
 namespace mmlio::ros2 {
@@ -15,15 +14,6 @@ namespace {
 
 // A domain of its own per test process, so that parallel runs and other DDS users do not meet.
 int testDomain() { return 100 + static_cast<int>(getpid() % 100); }
-
-template <class Pred> bool waitFor(Pred pred, double seconds) {
-  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
-  while (!pred()) {
-    if (std::chrono::steady_clock::now() > until) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  return true;
-}
 
 Cdr odometryNumber(int i) {
   nav_msgs::Odometry odom;
