@@ -31,6 +31,16 @@ std::string describe(const YAML::Node& node) {
   throw Error(where + ": expected " + expected + ", got " + describe(node));
 }
 
+/// A scalar yaml-cpp converts to T, else the type error naming what was expected.
+template <class T> void decodeScalar(const YAML::Node& node, const std::string& where, const char* expected, T& value) {
+  if (!node.IsScalar()) typeError(node, where, expected);
+  try {
+    value = node.as<T>();
+  } catch (const YAML::Exception&) {
+    typeError(node, where, expected);
+  }
+}
+
 }  // namespace
 
 std::string yamlLocation(const std::string& file, const YAML::Node& node) {
@@ -40,30 +50,15 @@ std::string yamlLocation(const std::string& file, const YAML::Node& node) {
 }
 
 void decodeYaml(const YAML::Node& node, const std::string& where, bool& value) {
-  if (!node.IsScalar()) typeError(node, where, "true or false");
-  try {
-    value = node.as<bool>();
-  } catch (const YAML::Exception&) {
-    typeError(node, where, "true or false");
-  }
+  decodeScalar(node, where, "true or false", value);
 }
 
 void decodeYaml(const YAML::Node& node, const std::string& where, int& value) {
-  if (!node.IsScalar()) typeError(node, where, "an integer");
-  try {
-    value = node.as<int>();
-  } catch (const YAML::Exception&) {
-    typeError(node, where, "an integer");
-  }
+  decodeScalar(node, where, "an integer", value);
 }
 
 void decodeYaml(const YAML::Node& node, const std::string& where, double& value) {
-  if (!node.IsScalar()) typeError(node, where, "a number");
-  try {
-    value = node.as<double>();
-  } catch (const YAML::Exception&) {
-    typeError(node, where, "a number");
-  }
+  decodeScalar(node, where, "a number", value);
 }
 
 void decodeYaml(const YAML::Node& node, const std::string& where, std::string& value) {
