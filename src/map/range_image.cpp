@@ -29,6 +29,12 @@ double fastAtan2(double y, double x) {
 // sqrt, not hypot: metres are far from overflow, and hypot guards against it slowly.
 double elevationOf(const Eigen::Vector3d& p) { return fastAtan2(p.z(), std::sqrt(p.x() * p.x() + p.y() * p.y())); }
 
+// Summarising a window (summariseWindows for all, windowAt for one): the nearest return so far
+// (kNone: none; larger than any saturated range), and on which sides of the window's centre
+// pixel returns lie.
+constexpr std::uint16_t kNone = 0xffff;
+constexpr std::uint8_t kBelow = 1, kAbove = 2, kLeft = 4, kRight = 8, kAll = kBelow | kAbove | kLeft | kRight;
+
 }  // namespace
 
 RangeImage::RangeImage(const std::vector<Point>& points, const RangeImageConfig& config) : cfg_(config) {
@@ -110,8 +116,6 @@ RangeImage RangeImage::withoutWindows() const {
 std::uint16_t RangeImage::windowAt(int arc_col, int row) const {
   // summariseWindows for one window, in the same terms.
   const int wr = cfg_.window_rows, wc = cfg_.window_cols;
-  constexpr std::uint16_t kNone = 0xffff;
-  constexpr std::uint8_t kBelow = 1, kAbove = 2, kLeft = 4, kRight = 8, kAll = kBelow | kAbove | kLeft | kRight;
   std::uint16_t nearest = kNone;
   std::uint8_t sides = 0;
   for (int dc = -wc; dc <= wc; ++dc) {
@@ -145,8 +149,6 @@ void RangeImage::summariseWindows() {
   const int wr = cfg_.window_rows, wc = cfg_.window_cols;
   const int ext_rows = rows_ + 2 * wr;
   const auto ext = static_cast<std::size_t>(ext_rows);
-  constexpr std::uint16_t kNone = 0xffff;  // as a nearest range: larger than any saturated one
-  constexpr std::uint8_t kBelow = 1, kAbove = 2;
   thread_local std::vector<std::uint16_t> nearest;       // per column and row: the nearest return within wr rows
   thread_local std::vector<std::uint8_t> sides;          // ... and whether one lies at or below, at or above
   thread_local std::vector<std::pair<int, int>> stored;  // (row, slot) of the rows with returns
@@ -172,7 +174,6 @@ void RangeImage::summariseWindows() {
   }
   window_width_ = std::min(circle_cols_, cols_ + 2 * wc);
   windows_.assign(ext * static_cast<std::size_t>(window_width_), 0);
-  constexpr std::uint8_t kLeft = 4, kRight = 8, kAll = kBelow | kAbove | kLeft | kRight;
   // Raw pointers: stores through std::uint8_t* may alias anything, so the vectors' own pointers
   // would be reloaded in every iteration.
   std::vector<std::uint16_t> window_near(ext);
