@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "mmlio/backend/loop_plausibility.hpp"
 #include "mmlio/backend/point_to_plane_icp.hpp"
 #include "mmlio/core/log.hpp"
 #include "mmlio/core/voxel_key.hpp"
@@ -39,19 +40,11 @@ MappingBackend::MappingBackend(Config cfg) : cfg_(std::move(cfg)), dynamic_(cfg_
 MappingBackend::~MappingBackend() = default;
 
 bool MappingBackend::plausibleCorrection(const backend::LoopResult& r) const {
-  // A loop may only correct what odometry can have drifted since the match: a place-descriptor
-  // match in a repetitive scene (a corridor's far end looking like its start) otherwise pulls
-  // the graph by tens of metres.
-  double path_m = 0.0;
-  for (int i = r.match + 1; i <= r.query; ++i)
-    path_m +=
-        (graph_.node(i).T_world_body_odom.translation() - graph_.node(i - 1).T_world_body_odom.translation()).norm();
-  const Eigen::Isometry3d T_est = graph_.pose(r.match).inverse() * graph_.pose(r.query);
-  const double correction_m = (T_est.translation() - r.T_match_query.translation()).norm();
-  const double allowed_m = cfg_.max_loop_correction_base_m + cfg_.max_drift_fraction * path_m;
-  if (correction_m <= allowed_m) return true;
-  log::emit(log::Level::kInfo, "loop ", r.query, " -> ", r.match, " rejected: it would move the pose by ", correction_m,
-            " m, more than odometry can drift over ", path_m, " m (", allowed_m, " m)");
+  const LoopCorrection c = loopCorrection(graph_, r, cfg_);
+  if (c.plausible()) return true;
+  log::emit(log::Level::kInfo, "loop ", r.query, " -> ", r.match, " rejected: it would move the pose by ",
+            c.correction_m, " m and turn it by ", c.correction_deg, " deg, more than odometry can drift over the ",
+            c.route_m, " m between them (", c.allowed_m, " m, ", c.allowed_deg, " deg)");
   return false;
 }
 
@@ -219,11 +212,14 @@ void MappingBackend::closeSubmap() {
   open_.clear();
   // A keyframe that added almost nothing new to the map revisits a place older keyframes cover:
   // its loop cloud would only duplicate theirs as a candidate, so it is freed (the last keyframe,
-  // still open, keeps its cloud for the end-of-run loop check).
+  // still open, keeps its cloud for the end-of-run loop check), and unless a loop ends at it, it
+  // leaves the optimised graph (PoseGraph::fold): the problem each loop solves then grows with the
+  // places mapped, not with the time spent revisiting them.
   const int k = static_cast<int>(submaps_.size()) - 1;
   if (cfg_.dedupe_revisits && leaf > 0.0 && k > 0 && seen > 0 && new_voxels < cfg_.revisit_new_fraction * seen) {
     graph_.dropCloud(k);
     if (closer_) closer_->forget(k);
+    graph_.fold(k);
   }
 }
 

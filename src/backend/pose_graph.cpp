@@ -3,7 +3,13 @@
 #include <ceres/ceres.h>
 
 #include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <functional>
+#include <limits>
+#include <queue>
 #include <stdexcept>
+#include <utility>
 
 #include "mmlio/core/log.hpp"
 
@@ -136,31 +142,70 @@ int PoseGraph::addKeyframe(KeyframeNode node) {
   if (!nodes_.empty() && node.stamp_ns < nodes_.back().stamp_ns)
     throw std::invalid_argument("PoseGraph::addKeyframe: keyframe stamps must not decrease");
   const int index = static_cast<int>(nodes_.size());
-  if (nodes_.empty()) {
-    params_.push_back(toParams(node.T_world_body_odom));
-  } else {
-    const Eigen::Isometry3d T_prev_cur = nodes_.back().T_world_body_odom.inverse() * node.T_world_body_odom;
-    params_.push_back(toParams(pose(index - 1) * T_prev_cur));
-    odom_edges_.push_back(
-        Edge{index - 1, index, T_prev_cur,
-             sqrtInformation(isotropicInformation(cfg_.odom_sigma_translation_m, cfg_.odom_sigma_rotation_rad))});
-  }
   nodes_.push_back(std::move(node));
+  folded_.push_back(false);
+  loop_end_.push_back(false);
+  if (index == 0) {
+    params_.push_back(toParams(nodes_.back().T_world_body_odom));
+  } else {
+    odom_edges_.push_back(edge(index - 1, index,
+                               nodes_[index - 1].T_world_body_odom.inverse() * nodes_[index].T_world_body_odom,
+                               isotropicInformation(cfg_.odom_sigma_translation_m, cfg_.odom_sigma_rotation_rad)));
+    params_.push_back(toParams(pose(index - 1) * odom_edges_.back().T_from_to));
+  }
   return index;
+}
+
+PoseGraph::Edge PoseGraph::edge(int from, int to, const Eigen::Isometry3d& T_from_to, const Matrix6d& information) {
+  return Edge{from, to, T_from_to, sqrtInformation(information), information.inverse()};
 }
 
 void PoseGraph::addLoop(int from, int to, const Eigen::Isometry3d& T_from_to, const Matrix6d& information) {
   const int n = static_cast<int>(nodes_.size());
   if (from < 0 || to < 0 || from >= n || to >= n || from == to)
     throw std::invalid_argument("PoseGraph::addLoop: keyframe index out of range");
-  loops_.push_back(Edge{from, to, T_from_to, sqrtInformation(information)});
+  if (folded_[from] || folded_[to])
+    throw std::invalid_argument("PoseGraph::addLoop: a folded keyframe cannot end a loop");
+  loops_.push_back(edge(from, to, T_from_to, information));
+  loop_end_[from] = loop_end_[to] = true;
+}
+
+bool PoseGraph::fold(int i) {
+  const int n = static_cast<int>(nodes_.size());
+  if (i <= 0 || i >= n - 1 || folded_[i] || loop_end_[i]) return false;
+  // Odometry edges join kept keyframes in order: the one leaving i follows the one reaching it.
+  const auto out = std::lower_bound(odom_edges_.begin(), odom_edges_.end(), i,
+                                    [](const Edge& e, int from) { return e.from < from; });
+  const auto in = std::prev(out);
+  // Composed T_ac = T_ab T_bc with independent noise (dp in the first frame, dtheta on the right,
+  // as the residual): dp_ac = dp_ab - R_ab [p_bc]x dtheta_ab + R_ab dp_bc, dtheta_ac = R_bc^T dtheta_ab
+  // + dtheta_bc. The rotation noise of the first leg moves the end sideways, which isotropic noise
+  // per step would miss.
+  const Eigen::Matrix3d R_ab = in->T_from_to.rotation(), R_bc = out->T_from_to.rotation();
+  const Eigen::Vector3d p_bc = out->T_from_to.translation();
+  Eigen::Matrix3d p_bc_hat;
+  p_bc_hat << 0, -p_bc.z(), p_bc.y(), p_bc.z(), 0, -p_bc.x(), -p_bc.y(), p_bc.x(), 0;
+  Matrix6d A = Matrix6d::Zero(), B = Matrix6d::Zero();
+  A.topLeftCorner<3, 3>().setIdentity();
+  A.topRightCorner<3, 3>() = -R_ab * p_bc_hat;
+  A.bottomRightCorner<3, 3>() = R_bc.transpose();
+  B.topLeftCorner<3, 3>() = R_ab;
+  B.bottomRightCorner<3, 3>().setIdentity();
+  Matrix6d covariance = A * in->covariance * A.transpose() + B * out->covariance * B.transpose();
+  covariance = 0.5 * (covariance + covariance.transpose());
+  *in = edge(in->from, out->to, in->T_from_to * out->T_from_to, covariance.inverse());
+  odom_edges_.erase(out);
+  folded_[i] = true;
+  ++folded_count_;
+  return true;
 }
 
 bool PoseGraph::optimize() {
   if (nodes_.size() < 2) return true;
   std::vector<Params> x = params_;
   ceres::Problem problem;
-  for (auto& p : x) problem.AddParameterBlock(p.data(), 7, new ceres::AutoDiffManifold<RightPosePlus, 7, 6>());
+  for (std::size_t i = 0; i < x.size(); ++i)
+    if (!folded_[i]) problem.AddParameterBlock(x[i].data(), 7, new ceres::AutoDiffManifold<RightPosePlus, 7, 6>());
   for (const Edge& e : odom_edges_)
     problem.AddResidualBlock(RelativePoseCost::Create(e.T_from_to, e.sqrt_information), nullptr, x[e.from].data(),
                              x[e.to].data());
@@ -170,9 +215,10 @@ bool PoseGraph::optimize() {
                              x[e.to].data());
   if (cfg_.tilt_sigma_rad > 0.0)
     for (std::size_t i = 1; i < nodes_.size(); ++i)
-      problem.AddResidualBlock(
-          TiltCost::Create(Eigen::Quaterniond(nodes_[i].T_world_body_odom.rotation()), cfg_.tilt_sigma_rad), nullptr,
-          x[i].data());
+      if (!folded_[i])
+        problem.AddResidualBlock(
+            TiltCost::Create(Eigen::Quaterniond(nodes_[i].T_world_body_odom.rotation()), cfg_.tilt_sigma_rad), nullptr,
+            x[i].data());
   problem.SetParameterBlockConstant(x[0].data());
 
   ceres::Solver::Options options;
@@ -186,8 +232,8 @@ bool PoseGraph::optimize() {
   options.num_threads = 1;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
-  log::debug("pose graph: ", nodes_.size(), " keyframes, ", loops_.size(), " loops, cost ", summary.initial_cost,
-             " -> ", summary.final_cost, " in ", summary.iterations.size(), " iterations");
+  log::debug("pose graph: ", optimised(), " of ", nodes_.size(), " keyframes, ", loops_.size(), " loops, cost ",
+             summary.initial_cost, " -> ", summary.final_cost, " in ", summary.iterations.size(), " iterations");
   if (!summary.IsSolutionUsable()) {
     log::warn("pose graph optimisation failed: ", summary.message);
     return false;
@@ -197,13 +243,78 @@ bool PoseGraph::optimize() {
     q.normalize();
   }
   params_ = std::move(x);
+  placeFolded();
   return true;
+}
+
+void PoseGraph::placeFolded() {
+  if (folded_count_ == 0) return;
+  const auto correctionAt = [&](int k) { return pose(k) * nodes_[k].T_world_body_odom.inverse(); };
+  const auto stepLength = [&](int i) {  // odometry from i - 1 to i
+    return (nodes_[i].T_world_body_odom.translation() - nodes_[i - 1].T_world_body_odom.translation()).norm();
+  };
+  const int n = static_cast<int>(nodes_.size());
+  for (int a = 0, b = 1; b < n; ++b) {
+    if (folded_[b]) continue;
+    if (b > a + 1) {  // a and b kept, a + 1 .. b - 1 folded
+      const Eigen::Isometry3d C_a = correctionAt(a), C_b = correctionAt(b);
+      const Eigen::Quaterniond q_a(C_a.rotation()), q_b(C_b.rotation());
+      double total = 0.0;
+      for (int i = a + 1; i <= b; ++i) total += stepLength(i);
+      double along = 0.0;
+      for (int i = a + 1; i < b; ++i) {
+        along += stepLength(i);
+        const double w = total > 0.0 ? along / total : static_cast<double>(i - a) / (b - a);
+        Eigen::Isometry3d C = Eigen::Isometry3d::Identity();
+        C.linear() = q_a.slerp(w, q_b).toRotationMatrix();
+        C.translation() = (1.0 - w) * C_a.translation() + w * C_b.translation();
+        params_[i] = toParams(C * nodes_[i].T_world_body_odom);
+      }
+    }
+    a = b;
+  }
 }
 
 void PoseGraph::dropCloud(int i) {
   auto& cloud = nodes_.at(static_cast<std::size_t>(i)).cloud_body;
   cloud.clear();
   cloud.shrink_to_fit();
+}
+
+double PoseGraph::routeLength(int a, int b) const {
+  const int n = static_cast<int>(nodes_.size());
+  if (a < 0 || b < 0 || a >= n || b >= n)
+    throw std::invalid_argument("PoseGraph::routeLength: keyframe index out of range");
+  // Dijkstra over the chain of odometry edges plus the loops' shortcuts.
+  const auto stepLength = [&](int i) {  // odometry edge i -> i + 1
+    return (nodes_[i + 1].T_world_body_odom.translation() - nodes_[i].T_world_body_odom.translation()).norm();
+  };
+  std::vector<std::vector<int>> shortcuts(nodes_.size());
+  for (const Edge& e : loops_) {
+    shortcuts[e.from].push_back(e.to);
+    shortcuts[e.to].push_back(e.from);
+  }
+  std::vector<double> dist(nodes_.size(), std::numeric_limits<double>::infinity());
+  using Entry = std::pair<double, int>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<>> open;
+  dist[a] = 0.0;
+  open.push({0.0, a});
+  while (!open.empty()) {
+    const auto [d, i] = open.top();
+    open.pop();
+    if (i == b) return d;
+    if (d > dist[i]) continue;
+    const auto relax = [&](int j, double length) {
+      if (d + length < dist[j]) {
+        dist[j] = d + length;
+        open.push({dist[j], j});
+      }
+    };
+    if (i + 1 < n) relax(i + 1, stepLength(i));
+    if (i > 0) relax(i - 1, stepLength(i - 1));
+    for (const int j : shortcuts[i]) relax(j, 0.0);
+  }
+  return dist[b];  // the chain connects every keyframe: not reached
 }
 
 Eigen::Isometry3d PoseGraph::pose(int i) const { return fromParams(params_.at(static_cast<std::size_t>(i))); }

@@ -172,6 +172,82 @@ TEST(PoseGraph, ALoopClosingVerticalDriftMovesHeightsNotTilt) {
   EXPECT_GT(tilt_without, 3.0 * tilt_with);
 }
 
+TEST(PoseGraph, RouteLengthFollowsTheOdometryUntilALoopShortensIt) {
+  PoseGraph graph = buildGraph(squareLoop());  // 40 one-metre steps, pose 40 back at pose 0
+  EXPECT_NEAR(graph.routeLength(0, 40), 40.0, 1e-9);
+  EXPECT_NEAR(graph.routeLength(35, 5), 30.0, 1e-9);
+  EXPECT_EQ(graph.routeLength(7, 7), 0.0);
+  graph.addLoop(0, 40, Eigen::Isometry3d::Identity(), isotropicInformation(0.01, 0.001));
+  EXPECT_NEAR(graph.routeLength(0, 40), 0.0, 1e-9);
+  EXPECT_NEAR(graph.routeLength(35, 5), 10.0, 1e-9);  // 35 -> 40 = 0 -> 5
+  EXPECT_NEAR(graph.routeLength(5, 35), 10.0, 1e-9);
+  EXPECT_NEAR(graph.routeLength(10, 30), 20.0, 1e-9);  // either way round
+  EXPECT_THROW(graph.routeLength(0, 41), std::invalid_argument);
+}
+
+TEST(PoseGraph, AGraphOfTheCornersAloneClosesTheLoopAndCorrectsTheFoldedKeyframes) {
+  // The square with yaw drift, solved twice: every keyframe optimised, and only the corners kept
+  // (the other 36 folded as they arrive, as the back end folds revisits). The folded graph's
+  // composed edges carry the steps' noise exactly; the two solutions differ by the problem's
+  // nonlinearity (4 deg of drift) within the corners' posterior spread (2 cm per step).
+  const auto gt = squareLoop();
+  const auto odom = driftingOdometry(gt, 0.1 * kDeg);
+  PoseGraph::Config cfg;
+  cfg.odom_sigma_rotation_rad = 0.1 * kDeg;
+  PoseGraph full = buildGraph(odom, cfg);
+  PoseGraph folded(cfg);
+  for (std::size_t i = 0; i < odom.size(); ++i) {
+    KeyframeNode node;
+    node.stamp_ns = static_cast<Stamp>(i + 1) * 1'000'000'000;
+    node.T_world_body_odom = odom[i];
+    folded.addKeyframe(node);
+    if (i >= 2 && (i - 1) % 10 != 0) {
+      EXPECT_TRUE(folded.fold(static_cast<int>(i) - 1));
+    }
+  }
+  EXPECT_EQ(folded.optimised(), 5u);  // 0, 10, 20, 30, 40
+  const int last = static_cast<int>(odom.size()) - 1;
+  // Folding changes nothing before an optimisation.
+  for (int i = 0; i <= last; ++i) EXPECT_LT((folded.pose(i).translation() - odom[i].translation()).norm(), 1e-9);
+  const Eigen::Isometry3d T_last_first = gt[last].inverse() * gt[0];
+  for (PoseGraph* g : {&full, &folded}) {
+    g->addLoop(last, 0, T_last_first, isotropicInformation(0.01, 0.05 * kDeg));
+    ASSERT_TRUE(g->optimize());
+  }
+  double worst_full = 0, worst_folded = 0, worst_odom = 0;
+  for (int i = 0; i <= last; ++i) {
+    worst_odom = std::max(worst_odom, (odom[i].translation() - gt[i].translation()).norm());
+    worst_full = std::max(worst_full, (full.pose(i).translation() - gt[i].translation()).norm());
+    worst_folded = std::max(worst_folded, (folded.pose(i).translation() - gt[i].translation()).norm());
+  }
+  std::printf("worst position error: odometry %.3f m, full graph %.3f m, folded %.3f m\n", worst_odom, worst_full,
+              worst_folded);
+  EXPECT_LT(worst_folded, 0.2 * worst_odom);
+  const Eigen::Isometry3d err = T_last_first.inverse() * (folded.pose(last).inverse() * folded.pose(0));
+  EXPECT_LT(err.translation().norm(), 0.01);
+  EXPECT_LT(angleOf(err), 0.05 * kDeg);
+  // Folded keyframes lie on the corrected path: no jump at a kept neighbour.
+  for (int i = 1; i <= last; ++i) {
+    const double step = (folded.pose(i).translation() - folded.pose(i - 1).translation()).norm();
+    EXPECT_NEAR(step, 1.0, 0.02) << i;
+  }
+}
+
+TEST(PoseGraph, FoldsNeitherTheAnchorNorTheNewestNorALoopsEnd) {
+  PoseGraph graph = buildGraph(squareLoop());
+  graph.addLoop(40, 0, Eigen::Isometry3d::Identity(), isotropicInformation(0.01, 0.001));
+  graph.addLoop(20, 5, Eigen::Isometry3d::Identity(), isotropicInformation(0.01, 0.001));
+  EXPECT_FALSE(graph.fold(0));
+  EXPECT_FALSE(graph.fold(40));
+  EXPECT_FALSE(graph.fold(5));
+  EXPECT_FALSE(graph.fold(20));
+  EXPECT_FALSE(graph.fold(41));
+  EXPECT_TRUE(graph.fold(6));
+  EXPECT_FALSE(graph.fold(6));  // once
+  EXPECT_EQ(graph.optimised(), 40u);
+  EXPECT_THROW(graph.addLoop(6, 30, Eigen::Isometry3d::Identity(), Matrix6d::Identity()), std::invalid_argument);
+}
+
 TEST(PoseGraph, RejectsBadInput) {
   PoseGraph graph;
   KeyframeNode a;

@@ -57,15 +57,30 @@ class PoseGraph {
   /// previous keyframe's current estimate, so earlier corrections carry forward. Returns its index.
   int addKeyframe(KeyframeNode node);
   /// Loop edge: T_from_to maps `to`'s body frame into `from`'s; information in (dp, dtheta) order.
+  /// Neither end may be folded.
   void addLoop(int from, int to, const Eigen::Isometry3d& T_from_to, const Matrix6d& information);
+  /// Takes keyframe i out of the optimised problem: its two odometry edges become one between its
+  /// neighbours in the problem (the steps' noise adding up), and from then on its pose follows
+  /// theirs, its correction interpolated between theirs by the distance travelled. For keyframes
+  /// that revisit mapped places: a survey that keeps revisiting would otherwise grow the problem
+  /// each loop solves without end. Returns false, changing nothing, for keyframe 0 (the gauge), the
+  /// newest keyframe, or one a loop ends at.
+  bool fold(int i);
   /// Optimises all poses, keyframe 0 fixed. Returns false if the solver failed (estimate kept).
   bool optimize();
 
   std::size_t size() const { return nodes_.size(); }
+  /// Keyframes in the optimised problem (size() less the folded ones).
+  std::size_t optimised() const { return nodes_.size() - folded_count_; }
   const KeyframeNode& node(int i) const { return nodes_.at(static_cast<std::size_t>(i)); }
   /// Current estimate of T_world_body of keyframe i (its odometry pose until optimised).
   Eigen::Isometry3d pose(int i) const;
   std::size_t loops() const { return loops_.size(); }
+  /// Length of the shortest route between keyframes a and b through the graph, m: an odometry edge
+  /// counts the distance the odometry travelled along it, a loop edge nothing (it ties its ends).
+  /// What the estimate of b relative to a can have drifted over: after loops, far less than the
+  /// distance travelled between them.
+  double routeLength(int a, int b) const;
   /// Frees keyframe i's cloud (it then stops being a loop candidate; its pose stays in the graph).
   void dropCloud(int i);
 
@@ -80,13 +95,20 @@ class PoseGraph {
     int from, to;
     Eigen::Isometry3d T_from_to;
     Matrix6d sqrt_information;  // upper-triangular, r^T I r = |S r|^2
+    Matrix6d covariance;        // odometry edges: of T_from_to, kept to compose folded edges
   };
+  static Edge edge(int from, int to, const Eigen::Isometry3d& T_from_to, const Matrix6d& information);
+  /// Sets the pose of every folded keyframe from its kept neighbours' (see fold()).
+  void placeFolded();
 
   Config cfg_;
   std::vector<KeyframeNode> nodes_;
   std::vector<std::array<double, 7>> params_;  // {px,py,pz,qx,qy,qz,qw} per keyframe
-  std::vector<Edge> odom_edges_;
+  std::vector<Edge> odom_edges_;               // between kept keyframes, in order
   std::vector<Edge> loops_;
+  std::vector<bool> folded_;
+  std::vector<bool> loop_end_;  // a loop edge starts or ends here
+  std::size_t folded_count_ = 0;
 };
 
 }  // namespace mmlio::backend
