@@ -9,7 +9,7 @@
 #include <deque>
 #include <mutex>
 
-namespace mmlio::ros_node {
+namespace mmlio::live {
 
 template <class T, std::size_t NumClasses> class BoundedQueue {
  public:
@@ -75,4 +75,4 @@ template <class T, std::size_t NumClasses> class BoundedQueue {
   bool closed_ = false;
 };
 
-}  // namespace mmlio::ros_node
+}  // namespace mmlio::live

@@ -7,7 +7,7 @@
 // Private header of mmlio::io (not installed under include/): the unit rule shared with bags.
 #include "../src/io/imu_unit.hpp"
 
-namespace mmlio::ros_node {
+namespace mmlio::live {
 
 ImuUnitGate::ImuUnitGate(std::string topic, std::string acc_unit, int samples)
     : topic_(std::move(topic)), acc_unit_(std::move(acc_unit)), samples_(samples) {
@@ -50,4 +50,4 @@ std::vector<ImuSample> ImuUnitGate::decide() {
   return out;
 }
 
-}  // namespace mmlio::ros_node
+}  // namespace mmlio::live

@@ -10,7 +10,7 @@
 
 #include "mmlio/core/types.hpp"
 
-namespace mmlio::ros_node {
+namespace mmlio::live {
 
 class ImuUnitGate {
  public:
@@ -34,4 +34,4 @@ class ImuUnitGate {
   std::vector<sensor_msgs::Imu> held_;
 };
 
-}  // namespace mmlio::ros_node
+}  // namespace mmlio::live

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cstring>
 
-namespace mmlio::ros_node {
+namespace mmlio::live {
 
 ros::Time toRosTime(Stamp stamp_ns) {
   ros::Time t;
@@ -128,4 +128,4 @@ nav_msgs::Path toPath(const Trajectory& trajectory, const std::string& frame_id)
   return path;
 }
 
-}  // namespace mmlio::ros_node
+}  // namespace mmlio::live

@@ -14,7 +14,7 @@
 #include "mmlio/core/types.hpp"
 #include "mmlio/estimator/degeneracy.hpp"
 
-namespace mmlio::ros_node {
+namespace mmlio::live {
 
 /// Integer nanoseconds since the epoch -> ros::Time (exact).
 ros::Time toRosTime(Stamp stamp_ns);
@@ -45,4 +45,4 @@ nav_msgs::Odometry toOdometry(const NavState& state, const Eigen::Isometry3d& T_
 
 nav_msgs::Path toPath(const Trajectory& trajectory, const std::string& frame_id);
 
-}  // namespace mmlio::ros_node
+}  // namespace mmlio::live

@@ -12,6 +12,7 @@
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TopicDataType.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
+#include <fastdds/rtps/common/WriteParams.h>
 
 #include <atomic>
 #include <cstdlib>
@@ -71,6 +72,14 @@ class FastDdsWriter : public DdsParticipant::Writer, public dds::DataWriterListe
   bool write(const Cdr& message) override {
     return writer->write(const_cast<Cdr*>(&message));  // Fast DDS takes void*; it only reads it
   }
+  bool writeReply(const Cdr& reply, const SampleIdentity& request) override {
+    rtps::WriteParams params;
+    rtps::SampleIdentity& related = params.related_sample_identity();
+    std::memcpy(related.writer_guid().guidPrefix.value, request.writer_guid.data(), 12);
+    std::memcpy(related.writer_guid().entityId.value, request.writer_guid.data() + 12, 4);
+    related.sequence_number() = rtps::SequenceNumber_t(request.sequence_high, request.sequence_low);
+    return writer->write(const_cast<Cdr*>(&reply), params);
+  }
   int matched() const override { return matched_.load(); }
   void on_publication_matched(dds::DataWriter*, const dds::PublicationMatchedStatus& status) override {
     matched_ = status.current_count;
@@ -83,16 +92,28 @@ class FastDdsWriter : public DdsParticipant::Writer, public dds::DataWriterListe
 
 class FastDdsReader : public dds::DataReaderListener {
  public:
-  explicit FastDdsReader(DdsParticipant::OnMessage on_message) : on_message_(std::move(on_message)) {}
+  explicit FastDdsReader(DdsParticipant::OnRequest on_sample) : on_sample_(std::move(on_sample)) {}
   void on_data_available(dds::DataReader* reader) override {
     Cdr sample;
     dds::SampleInfo info;
     while (reader->take_next_sample(&sample, &info) == ReturnCode_t::RETCODE_OK)
-      if (info.valid_data) on_message_(std::move(sample));
+      if (info.valid_data) on_sample_(std::move(sample), replyIdentity(info));
   }
 
  private:
-  DdsParticipant::OnMessage on_message_;
+  static SampleIdentity replyIdentity(const dds::SampleInfo& info) {
+    rtps::GUID_t guid = info.sample_identity.writer_guid();
+    if (info.related_sample_identity.writer_guid() != rtps::GUID_t::unknown())
+      guid = info.related_sample_identity.writer_guid();
+    SampleIdentity id;
+    std::memcpy(id.writer_guid.data(), guid.guidPrefix.value, 12);
+    std::memcpy(id.writer_guid.data() + 12, guid.entityId.value, 4);
+    id.sequence_high = info.sample_identity.sequence_number().high;
+    id.sequence_low = info.sample_identity.sequence_number().low;
+    return id;
+  }
+
+  DdsParticipant::OnRequest on_sample_;
 };
 
 }  // namespace
@@ -152,7 +173,9 @@ DdsParticipant::Writer& DdsParticipant::writer(const std::string& wire_topic, co
                                                const Qos& qos) {
   dds::DataWriterQos wq = dds::DATAWRITER_QOS_DEFAULT;
   apply(qos, &wq);
-  wq.publish_mode().kind = dds::ASYNCHRONOUS_PUBLISH_MODE;  // large samples go out in fragments
+  // Synchronous, as rmw_fastrtps publishes since Galactic: a sample leaves in write(), so a burst
+  // of small ones (IMU) never waits behind a large one (a point cloud) in a keep-last history.
+  wq.publish_mode().kind = dds::SYNCHRONOUS_PUBLISH_MODE;
   auto w = std::make_unique<FastDdsWriter>();
   w->writer = impl_->publisher->create_datawriter(impl_->topic(wire_topic, wire_type), wq, w.get());
   if (w->writer == nullptr) throw Error("DDS: cannot create a writer of " + wire_topic);
@@ -162,9 +185,16 @@ DdsParticipant::Writer& DdsParticipant::writer(const std::string& wire_topic, co
 
 void DdsParticipant::reader(const std::string& wire_topic, const std::string& wire_type, const Qos& qos,
                             OnMessage on_message) {
+  requestReader(wire_topic, wire_type, qos, [on_message = std::move(on_message)](Cdr&& message, const SampleIdentity&) {
+    on_message(std::move(message));
+  });
+}
+
+void DdsParticipant::requestReader(const std::string& wire_topic, const std::string& wire_type, const Qos& qos,
+                                   OnRequest on_request) {
   dds::DataReaderQos rq = dds::DATAREADER_QOS_DEFAULT;
   apply(qos, &rq);
-  auto r = std::make_unique<FastDdsReader>(std::move(on_message));
+  auto r = std::make_unique<FastDdsReader>(std::move(on_request));
   if (impl_->subscriber->create_datareader(impl_->topic(wire_topic, wire_type), rq, r.get()) == nullptr)
     throw Error("DDS: cannot create a reader of " + wire_topic);
   impl_->readers.push_back(std::move(r));

@@ -2,6 +2,7 @@
 // A ROS 2 node's presence on DDS, through Debian's Fast DDS (the default RMW of Humble and Jazzy):
 // one domain participant, writers and readers of ROS 2 topics whose samples are the messages'
 // serialised CDR (ros2_wire.hpp), under ROS 2's wire names and with the QoS ROS 2 profiles map to.
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -26,6 +27,14 @@ Qos reliableQos(int depth = 10);
 /// A map or path for late joiners: reliable, transient local, keep last 1.
 Qos latchedQos();
 
+/// Which request a service reply answers: the writer GUID and sequence number rmw_fastrtps clients
+/// match their replies by.
+struct SampleIdentity {
+  std::array<std::uint8_t, 16> writer_guid{};
+  std::int32_t sequence_high = 0;
+  std::uint32_t sequence_low = 0;
+};
+
 class DdsParticipant {
  public:
   /// Joins DDS domain `domain_id` (ROS_DOMAIN_ID; 0-232). Throws mmlio::Error if DDS refuses.
@@ -39,16 +48,23 @@ class DdsParticipant {
     virtual ~Writer() = default;
     /// Sends one serialised message (false if DDS refused it).
     virtual bool write(const Cdr& message) = 0;
+    /// Sends a service reply answering `request` (its related sample identity).
+    virtual bool writeReply(const Cdr& reply, const SampleIdentity& request) = 0;
     /// Readers currently matched (discovered, with compatible QoS).
     virtual int matched() const = 0;
   };
   using OnMessage = std::function<void(Cdr&& message)>;
+  using OnRequest = std::function<void(Cdr&& request, const SampleIdentity& identity)>;
 
   /// A writer of `wire_topic` ("rt/..."), samples of `wire_type` ("pkg::msg::dds_::Type_"). The
   /// participant owns it.
   Writer& writer(const std::string& wire_topic, const std::string& wire_type, const Qos& qos);
   /// Calls on_message on DDS's listener thread for every sample received.
   void reader(const std::string& wire_topic, const std::string& wire_type, const Qos& qos, OnMessage on_message);
+  /// A reader of service requests: each comes with the identity its reply must carry. As
+  /// rmw_fastrtps serves them: the request's own identity, its writer GUID replaced by the one the
+  /// client names in the request's related sample identity (its reply reader), when it names one.
+  void requestReader(const std::string& wire_topic, const std::string& wire_type, const Qos& qos, OnRequest on_request);
 
  private:
   struct Impl;

@@ -8,7 +8,7 @@
 // service requests "rq" + name + "Request", replies "rr" + name + "Reply") and the type names of
 // rosidl_typesupport_fastrtps / rosidl_typesupport_introspection ("pkg::msg::dds_::Type_").
 //
-// The messages come in as the ROS 1 structs the ROS 1 node fills (ros/ros_messages.hpp makes them
+// The messages come in as the ROS 1 structs the ROS 1 node fills (live/ros_messages.hpp makes them
 // from the estimator's state): the two distributions share every field the node publishes but the
 // header, whose ROS 2 form has no seq and an int32 sec.
 #include <nav_msgs/Odometry.h>

@@ -5,12 +5,12 @@
 #include <cstring>
 #include <string>
 
-#include "../bounded_queue.hpp"
-#include "../imu_unit_gate.hpp"
-#include "../ros_messages.hpp"
+#include "bounded_queue.hpp"
+#include "imu_unit_gate.hpp"
+#include "ros_messages.hpp"
 #include "mmlio/core/error.hpp"
 
-namespace mmlio::ros_node {
+namespace mmlio::live {
 namespace {
 
 TEST(BoundedQueue, AFullClassDropsItsNewItemsButNotTheOtherClass) {
@@ -182,4 +182,4 @@ TEST(RosMessages, TransformAndPathCarryPosesInTheirFrames) {
 }
 
 }  // namespace
-}  // namespace mmlio::ros_node
+}  // namespace mmlio::live

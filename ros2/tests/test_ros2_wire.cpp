@@ -2,7 +2,7 @@
 
 #include <cstring>
 
-#include "cdr_messages.hpp"  // the ROS 2 bag reader's decoders (src/io)
+#include "mmlio/io/cdr_messages.hpp"
 #include "mmlio/core/error.hpp"
 #include "ros2_wire.hpp"
 
@@ -90,7 +90,7 @@ TEST(Ros2Wire, APointCloudReadsBackThroughTheRos2BagDecoder) {
   cloud.row_step = 48;
   cloud.is_dense = true;
   for (int i = 0; i < 48; ++i) cloud.data.push_back(static_cast<std::uint8_t>(7 * i + 1));
-  const sensor_msgs::PointCloud2 back = io::detail::decodePointCloud2Cdr(encode(cloud));
+  const sensor_msgs::PointCloud2 back = io::decodePointCloud2Cdr(encode(cloud));
   EXPECT_EQ(back.header.stamp.sec, 42u);
   EXPECT_EQ(back.header.stamp.nsec, 7u);
   EXPECT_EQ(back.header.frame_id, "map");

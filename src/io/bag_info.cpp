@@ -13,7 +13,7 @@
 #include <set>
 
 #include "bag_open.hpp"
-#include "cdr_messages.hpp"
+#include "mmlio/io/cdr_messages.hpp"
 #include "imu_unit.hpp"
 #include "message_types.hpp"
 #include "mmlio/core/error.hpp"
@@ -109,30 +109,30 @@ BagInfo describeRos2Bag(const std::string& path) {
     }
     if (r.messages >= 2 && r.end_ns > r.begin_ns)
       t.rate_hz = static_cast<double>(r.messages - 1) / toSec(r.end_ns - r.begin_ns);
-    const detail::Ros2Type type = detail::ros2Type(r.type);
-    if (type == detail::Ros2Type::kImu && r.messages > 0 && info.imu_unit_guess.empty()) {
+    const Ros2Type type = ros2Type(r.type);
+    if (type == Ros2Type::kImu && r.messages > 0 && info.imu_unit_guess.empty()) {
       bag->restart({i});
       const auto next = [&](sensor_msgs::Imu* out) {
         detail::Ros2Message m;
         if (!bag->next(&m)) return false;
-        *out = detail::decodeImuCdr(m.data);
+        *out = decodeImuCdr(m.data);
         return true;
       };
       info.imu_unit_guess = imuUnitFromMeanAcc(meanImuAccNorm(next, kSampledMessages));
-    } else if (type != detail::Ros2Type::kOther && type != detail::Ros2Type::kImu && r.messages > 0) {
+    } else if (type != Ros2Type::kOther && type != Ros2Type::kImu && r.messages > 0) {
       bag->restart({i});
       detail::Ros2Message m;
       double points = 0;
       int n = 0;
       while (n < kSampledMessages && bag->next(&m)) {
         try {
-          if (type == detail::Ros2Type::kPointCloud2) {
-            const auto c = detail::decodePointCloud2Cdr(m.data);
+          if (type == Ros2Type::kPointCloud2) {
+            const auto c = decodePointCloud2Cdr(m.data);
             if (t.fields.empty()) t.fields = pointFieldDescriptions(c);
             points += static_cast<double>(c.width) * c.height;
           } else {
             if (t.fields.empty()) t.fields = kLivoxFields;
-            points += static_cast<double>(detail::decodeLivoxCdr(m.data).points.size());
+            points += static_cast<double>(decodeLivoxCdr(m.data).points.size());
           }
           ++n;
         } catch (const std::exception& e) {

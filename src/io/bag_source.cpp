@@ -14,7 +14,7 @@
 #include <type_traits>
 
 #include "bag_open.hpp"
-#include "cdr_messages.hpp"
+#include "mmlio/io/cdr_messages.hpp"
 #include "imu_unit.hpp"
 #include "message_types.hpp"
 #include "mmlio/core/error.hpp"
@@ -65,16 +65,11 @@ struct Ros2Msg {
   std::string md5() const { return t.type; }
   template <class T> boost::shared_ptr<T> instantiate() const {
     if constexpr (std::is_same_v<T, sensor_msgs::Imu>) {
-      return detail::ros2Type(t.type) == detail::Ros2Type::kImu ? boost::make_shared<T>(detail::decodeImuCdr(m.data))
-                                                                : nullptr;
+      return ros2Type(t.type) == Ros2Type::kImu ? boost::make_shared<T>(decodeImuCdr(m.data)) : nullptr;
     } else if constexpr (std::is_same_v<T, sensor_msgs::PointCloud2>) {
-      return detail::ros2Type(t.type) == detail::Ros2Type::kPointCloud2
-                 ? boost::make_shared<T>(detail::decodePointCloud2Cdr(m.data))
-                 : nullptr;
+      return ros2Type(t.type) == Ros2Type::kPointCloud2 ? boost::make_shared<T>(decodePointCloud2Cdr(m.data)) : nullptr;
     } else {
-      return detail::ros2Type(t.type) == detail::Ros2Type::kLivox
-                 ? boost::make_shared<T>(detail::decodeLivoxCdr(m.data))
-                 : nullptr;
+      return ros2Type(t.type) == Ros2Type::kLivox ? boost::make_shared<T>(decodeLivoxCdr(m.data)) : nullptr;
     }
   }
 };
@@ -308,7 +303,7 @@ void BagSource::Impl::openRos2(const BagSourceOptions& options) {
     const auto next = [&](sensor_msgs::Imu* out) {
       detail::Ros2Message m;
       if (!ros2->next(&m)) return false;
-      *out = detail::decodeImuCdr(m.data);
+      *out = decodeImuCdr(m.data);
       return true;
     };
     acc_scale = imuAccScaleFromMean([&] { return meanImuAccNorm(next); }, options.imu_topic, options.acc_unit, path);

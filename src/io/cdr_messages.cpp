@@ -1,11 +1,11 @@
-#include "cdr_messages.hpp"
+#include "mmlio/io/cdr_messages.hpp"
 
 #include <fastcdr/Cdr.h>
 #include <fastcdr/FastBuffer.h>
 
 #include <stdexcept>
 
-namespace mmlio::io::detail {
+namespace mmlio::io {
 namespace {
 
 namespace fc = eprosima::fastcdr;
@@ -154,4 +154,4 @@ LivoxCustomMsg decodeLivoxCdr(const std::vector<std::uint8_t>& cdr) {
   });
 }
 
-}  // namespace mmlio::io::detail
+}  // namespace mmlio::io

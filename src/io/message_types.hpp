@@ -4,7 +4,7 @@
 #include <string>
 
 #include "mmlio/io/livox_msg.hpp"
-#include "cdr_messages.hpp"
+#include "mmlio/io/cdr_messages.hpp"
 
 namespace mmlio::io::detail {
 

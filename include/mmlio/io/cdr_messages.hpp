@@ -1,8 +1,8 @@
 #pragma once
-// Private helper of src/io: ROS 2 messages (CDR, as rosbag2 stores them) decoded into the same message structs the ROS
-// 1 reader fills, so that every decoder and check behind them is shared. Layouts are the ROS 2 IDL ones:
-// builtin_interfaces/Time is int32 sec + uint32 nanosec, and fields are aligned to their size counted from the end of
-// the 4-byte encapsulation header.
+// ROS 2 messages (CDR, as rosbag2 stores them and DDS carries them) decoded into the same message structs the ROS 1
+// reader fills, so that every decoder and check behind them is shared: by the ROS 2 bag reader and the ROS 2 node.
+// Layouts are the ROS 2 IDL ones: builtin_interfaces/Time is int32 sec + uint32 nanosec, and fields are aligned to
+// their size counted from the end of the 4-byte encapsulation header.
 #include <sensor_msgs/Imu.h>
 #include <sensor_msgs/PointCloud2.h>
 
@@ -12,7 +12,7 @@
 
 #include "mmlio/io/livox_msg.hpp"
 
-namespace mmlio::io::detail {
+namespace mmlio::io {
 
 /// What a ROS 2 type name is to the reader.
 enum class Ros2Type { kOther, kImu, kPointCloud2, kLivox };
@@ -26,4 +26,4 @@ sensor_msgs::Imu decodeImuCdr(const std::vector<std::uint8_t>& cdr);
 sensor_msgs::PointCloud2 decodePointCloud2Cdr(const std::vector<std::uint8_t>& cdr);
 LivoxCustomMsg decodeLivoxCdr(const std::vector<std::uint8_t>& cdr);
 
-}  // namespace mmlio::io::detail
+}  // namespace mmlio::io

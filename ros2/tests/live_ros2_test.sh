@@ -1,0 +1,98 @@
+#!/usr/bin/env bash
+# mmlio_ros2 on DDS as ROS 2 runs it: a short simulated office's ROS 2 twin played into DDS with the
+# drivers' type names and sensor-data QoS (ros2_play, Fast DDS), the node, and a ROS 2 peer built on
+# the other DDS Debian packages (cyclone_listen, Cyclone DDS) reading odometry, path and /tf. Checks
+# the topics' frames and rates, that the odometry the peer received scores like `mmlio run`'s (ATE at
+# most 1.2 cm, and within 5 % of it), that the node's own odometry equals `mmlio run`'s, the
+# save_map service called as rmw_fastrtps clients call it, and the outputs written on SIGINT.
+# Usage: live_ros2_test.sh MMLIO MMLIO_ROS2 ROS2_PLAY ROS2_SAVE_MAP CYCLONE_LISTEN CONFIG_DIR
+set -euo pipefail
+MMLIO="$1" NODE="$2" PLAY="$3" SAVE="$4" LISTEN="$5" CONFIG_DIR="$6"
+export PATH="/usr/bin:/bin:$PATH"
+work=$(mktemp -d /tmp/mmlio-ros2-test.XXXXXX)
+export ROS_DOMAIN_ID=$((100 + $$ % 100))  # away from a user's domain 0 and from parallel runs
+pids=()
+cleanup() {
+  for p in "${pids[@]}"; do kill -INT "$p" 2> /dev/null || true; done
+  sleep 1
+  for p in "${pids[@]}"; do kill -KILL "$p" 2> /dev/null || true; done
+  [ -n "${KEEP_WORK:-}" ] || rm -rf "$work"
+}
+trap cleanup EXIT
+fail() { echo "FAIL: $*"; for f in "$work"/*.log; do echo "--- $f"; tail -20 "$f"; done; exit 1; }
+
+"$MMLIO" -q simulate --scenario office --duration 30 --seed 5 --out "$work/sim" > /dev/null 2>&1 || fail "simulate"
+bag="$work/sim/office.bag" truth="$work/sim/office_truth.yaml" gt="$work/sim/office_gt.tum"
+"$MMLIO" -q run "$bag" --config "$CONFIG_DIR/hvi.yaml" --calib "$truth" --no-progress --out "$work/run" \
+  > "$work/run.log" 2>&1 || fail "mmlio run"
+
+mkdir -p "$work/listen"
+"$LISTEN" "$ROS_DOMAIN_ID" mmlio "$work/listen" > "$work/listen.log" 2>&1 &
+listen_pid=$!
+pids+=($listen_pid)
+stdbuf -oL -eL "$NODE" --config "$CONFIG_DIR/hvi.yaml" --calib "$truth" --out-dir "$work/node" --map-period 2 \
+  > "$work/node.log" 2>&1 &
+node_pid=$!
+pids+=($node_pid)
+"$PLAY" "$ROS_DOMAIN_ID" "$bag" 1 livox_ros_driver2/msg/CustomMsg > "$work/play.log" 2>&1 || fail "ros2_play"
+
+sleep 3  # the node catches up with what it queued
+reply=$("$SAVE" "$ROS_DOMAIN_ID" mmlio 2>&1) || fail "save_map: $reply"
+echo "$reply" | grep -q "success: true" || fail "save_map: $reply"
+[ -s "$work/node/trajectory.tum" ] && [ -s "$work/node/map.pcd" ] && [ -s "$work/node/report.json" ] ||
+  fail "save_map wrote no trajectory, map or report"
+rm -f "$work/node/trajectory.tum"
+kill -INT "$node_pid"
+for _ in $(seq 100); do kill -0 "$node_pid" 2> /dev/null || break; sleep 0.3; done
+kill -0 "$node_pid" 2> /dev/null && fail "the node did not stop on SIGINT"
+wait "$node_pid" || fail "the node exited with an error"
+[ -s "$work/node/trajectory.tum" ] && [ -s "$work/node/map.pcd" ] && [ -s "$work/node/report.json" ] ||
+  fail "no trajectory, map or report written on SIGINT"
+kill -TERM "$listen_pid"
+wait "$listen_pid" || fail "cyclone_listen"
+
+ate() { "$MMLIO" evaluate --gt "$gt" --est "$1" --json | python3 -c 'import json,sys; print(json.load(sys.stdin)["ate_rmse_m"])'; }
+run_ate=$(ate "$work/run/trajectory_odometry.tum")
+peer_ate=$(ate "$work/listen/odometry.tum")
+
+python3 - "$work" "$run_ate" "$peer_ate" << 'PY' || fail "checks above"
+import json, sys
+
+work, run_ate, peer_ate = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])
+errors = []
+def check(ok, what):
+    print(("ok    " if ok else "FAIL  ") + what)
+    if not ok:
+        errors.append(what)
+
+def read_tum(path):
+    return [line.split() for line in open(path) if line.strip() and not line.startswith("#")]
+
+s = json.load(open(f"{work}/listen/summary.json"))
+run_odo = read_tum(f"{work}/run/trajectory_odometry.tum")
+n = s["odometry_messages"]
+rate = (n - 1) / s["odometry_span_s"] if n > 1 and s["odometry_span_s"] > 0 else 0.0
+# The sweep the shutdown flushes goes into the outputs only.
+check(len(run_odo) - 1 <= n <= len(run_odo), f"the peer received an Odometry per sweep ({n}; mmlio run {len(run_odo)} poses)")
+check(9.0 < rate < 11.0, f"odometry at the sweep rate: {rate:.2f} Hz")
+check(s["odometry_frames"] == [["odom", "imu"]], f"odometry: odom -> imu ({s['odometry_frames']})")
+check(["map", "odom"] in s["tf_edges"] and ["odom", "imu"] in s["tf_edges"], f"tf tree map -> odom -> imu ({s['tf_edges']})")
+check(s["tf_messages"] >= n, f"a TFMessage per sweep ({s['tf_messages']})")
+check(s["path_messages"] >= 5 and s["path_frame"] == "map", f"path per keyframe in map ({s['path_messages']})")
+check(s["path_poses"] >= 0.9 * n, f"the last path holds every pose ({s['path_poses']})")
+check(peer_ate <= 0.012, f"the peer's odometry ATE {100 * peer_ate:.2f} cm <= 1.2 cm")
+check(peer_ate <= 1.05 * run_ate + 1e-4, f"... within 5 % of mmlio run's {100 * run_ate:.2f} cm")
+# Best effort, as the drivers publish: a sample DDS loses under load (a burst of IMU ones now and
+# then when two busy cores play twice as fast) changes the estimate a little from there on, so
+# equal within 2 cm, not bit for bit (the ROS 1 node's TCP test checks that).
+node_odo = read_tum(f"{work}/node/trajectory_odometry.tum")
+gap = max((sum((float(a[i]) - float(b[i])) ** 2 for i in (1, 2, 3)) ** 0.5 for a, b in zip(node_odo, run_odo)), default=1.0)
+check(len(node_odo) == len(run_odo) and gap < 0.02,
+      f"node odometry == mmlio run's within {100 * gap:.2f} cm ({len(node_odo)} vs {len(run_odo)} poses)")
+report = json.load(open(f"{work}/node/report.json"))
+run_imu = json.load(open(f"{work}/run/report.json"))["input"]["imu_messages"]
+check(report["input"]["imu_messages"] >= 0.99 * run_imu, f"IMU samples received: {report['input']['imu_messages']} of {run_imu}")
+check(report["input"]["queue_dropped"]["imu"] == 0 and report["input"]["queue_dropped"]["scans"] == 0, "no message dropped")
+sys.exit(1 if errors else 0)
+PY
+echo "PASS"
