@@ -39,8 +39,8 @@ FeederOptions checked(FeederOptions o) {
 LiveFeeder::LiveFeeder(const config::RigConfig& cfg, FeederOptions options, Outlet& outlet)
     : options_(checked(std::move(options))),
       outlet_(outlet),
-      queue_({static_cast<std::size_t>(options_.max_queued_imu), static_cast<std::size_t>(options_.max_queued_scans),
-              8}),
+      queue_(
+          {static_cast<std::size_t>(options_.max_queued_imu), static_cast<std::size_t>(options_.max_queued_scans), 8}),
       imu_gate_(cfg.imu.topic, cfg.imu.acc_unit),
       system_(cfg, options_.mode, [this](const estimator::SweepResult& r) { onSweep(r); }) {
   lidars_ = config::activeLidars(cfg, system_.mode());

@@ -46,8 +46,8 @@ struct Options {
 class DdsOutlet : public live::Outlet {
  public:
   DdsOutlet(DdsParticipant& dds, const std::string& node)
-      : odometry_(dds.writer(topicOnWire("/" + node + "/odometry"), typeOnWire("nav_msgs/msg/Odometry"),
-                             reliableQos(100))),
+      : odometry_(
+            dds.writer(topicOnWire("/" + node + "/odometry"), typeOnWire("nav_msgs/msg/Odometry"), reliableQos(100))),
         path_(dds.writer(topicOnWire("/" + node + "/path"), typeOnWire("nav_msgs/msg/Path"), latchedQos())),
         scan_(dds.writer(topicOnWire("/" + node + "/cloud_registered"), typeOnWire("sensor_msgs/msg/PointCloud2"),
                          reliableQos(2))),
@@ -157,7 +157,8 @@ int run(const Options& o, const sigset_t& stop_signals) {
   live::LiveFeeder feeder(cfg, o.feeder, outlet);
   SaveService service(*dds, o.name, feeder);
   subscribe(*dds, feeder, cfg, o);
-  log::info("running as /", o.name, " in DDS domain ", domainIdFromEnvironment(), "; Ctrl-C stops and writes the outputs");
+  log::info("running as /", o.name, " in DDS domain ", domainIdFromEnvironment(),
+            "; Ctrl-C stops and writes the outputs");
   int signal = 0;
   sigwait(&stop_signals, &signal);
   log::info("stopping (signal ", signal, ")");
@@ -178,7 +179,8 @@ int main(int argc, char** argv) {
   CLI::App app(ros2::kDescription, "mmlio_ros2");
   app.add_option("-c,--config", o.config, "Rig config YAML (default: built-in, as config/hvi.yaml)")
       ->check(CLI::ExistingFile);
-  app.add_option("-m,--mode", f.mode, "hvi | vi | hi (default: the config's)")->check(CLI::IsMember({"hvi", "vi", "hi"}));
+  app.add_option("-m,--mode", f.mode, "hvi | vi | hi (default: the config's)")
+      ->check(CLI::IsMember({"hvi", "vi", "hi"}));
   app.add_option("--calib", o.calib, "Calibration YAML from `mmlio calibrate`, overriding the config's extrinsics")
       ->check(CLI::ExistingFile);
   app.add_option("-o,--out-dir", f.out_dir, "Where save_map and Ctrl-C write trajectory.tum, map.pcd, report.json");

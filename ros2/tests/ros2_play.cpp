@@ -27,7 +27,8 @@ int main(int argc, char** argv) {
     DdsParticipant player(domain, "ros2_play");
     std::map<std::string, DdsParticipant::Writer*> writers;
     for (const auto& r : records)
-      if (!writers.count(r.topic)) writers[r.topic] = &player.writer(topicOnWire(r.topic), typeOnWire(r.type), sensorDataQos());
+      if (!writers.count(r.topic))
+        writers[r.topic] = &player.writer(topicOnWire(r.topic), typeOnWire(r.type), sensorDataQos());
     const bool matched = waitFor(
         [&] {
           for (const auto& [topic, w] : writers)
@@ -40,7 +41,8 @@ int main(int argc, char** argv) {
     const auto start = std::chrono::steady_clock::now();
     const std::uint64_t t0 = records.front().time_ns;
     for (const auto& r : records) {
-      std::this_thread::sleep_until(start + std::chrono::nanoseconds(static_cast<std::int64_t>((r.time_ns - t0) / rate)));
+      std::this_thread::sleep_until(start +
+                                    std::chrono::nanoseconds(static_cast<std::int64_t>((r.time_ns - t0) / rate)));
       if (!writers[r.topic]->write(r.cdr)) std::cerr << "ros2_play: DDS refused a message on " << r.topic << "\n";
     }
     std::this_thread::sleep_for(std::chrono::seconds(1));  // best effort: let the last ones leave

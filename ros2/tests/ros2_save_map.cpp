@@ -86,12 +86,14 @@ int main(int argc, char** argv) {
 
   int code = 1;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  fdds::PublicationMatchedStatus pub{};
-  fdds::SubscriptionMatchedStatus sub{};
-  while ((writer->get_publication_matched_status(pub), pub.current_count == 0 ||
-                                                           (reader->get_subscription_matched_status(sub),
-                                                            sub.current_count == 0)) &&
-         std::chrono::steady_clock::now() < deadline)
+  const auto matched = [&] {
+    fdds::PublicationMatchedStatus pub{};
+    fdds::SubscriptionMatchedStatus sub{};
+    writer->get_publication_matched_status(pub);
+    reader->get_subscription_matched_status(sub);
+    return pub.current_count > 0 && sub.current_count > 0;
+  };
+  while (!matched() && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
 
