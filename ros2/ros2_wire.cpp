@@ -4,6 +4,7 @@
 #include <fastcdr/FastBuffer.h>
 
 #include <cctype>
+#include <type_traits>
 
 #include "mmlio/core/error.hpp"
 
@@ -13,41 +14,39 @@ namespace {
 namespace fc = eprosima::fastcdr;
 
 /// Fields in ROS 2's order and alignment (each to its own size, counted after the encapsulation
-/// header), little endian, as rmw serialises them.
+/// header), little endian, as rmw serialises them. Fast CDR skips alignment bytes without writing
+/// them, and its buffer grows uninitialised: the padding is written here, as zeros, so the bytes on
+/// the wire are the message's alone (the same message, the same bytes).
 class CdrWriter {
  public:
   CdrWriter() : cdr_(buffer_, fc::Cdr::LITTLE_ENDIANNESS, fc::Cdr::DDS_CDR) { cdr_.serialize_encapsulation(); }
 
   template <class T> CdrWriter& operator<<(const T& v) {
+    if constexpr (std::is_arithmetic_v<T>)
+      align(sizeof(T));
+    else
+      align(4);  // a string starts with its uint32 length
     cdr_.serialize(v);
     return *this;
   }
   void bytes(const std::vector<std::uint8_t>& v) {
-    cdr_.serialize(static_cast<std::uint32_t>(v.size()));
+    *this << static_cast<std::uint32_t>(v.size());
     if (!v.empty()) cdr_.serializeArray(v.data(), v.size());
   }
   void header(const std_msgs::Header& h) {
     // builtin_interfaces/Time: int32 sec, uint32 nanosec (ROS 1: uint32 sec); no seq.
-    cdr_.serialize(static_cast<std::int32_t>(h.stamp.sec));
-    cdr_.serialize(static_cast<std::uint32_t>(h.stamp.nsec));
-    cdr_.serialize(h.frame_id);
+    *this << static_cast<std::int32_t>(h.stamp.sec) << static_cast<std::uint32_t>(h.stamp.nsec) << h.frame_id;
   }
-  void vector3(double x, double y, double z) {
-    cdr_.serialize(x);
-    cdr_.serialize(y);
-    cdr_.serialize(z);
-  }
+  void vector3(double x, double y, double z) { *this << x << y << z; }
   void pose(const geometry_msgs::Pose& p) {
     vector3(p.position.x, p.position.y, p.position.z);
     quaternion(p.orientation);
   }
-  void quaternion(const geometry_msgs::Quaternion& q) {
-    cdr_.serialize(q.x);
-    cdr_.serialize(q.y);
-    cdr_.serialize(q.z);
-    cdr_.serialize(q.w);
+  void quaternion(const geometry_msgs::Quaternion& q) { *this << q.x << q.y << q.z << q.w; }
+  template <std::size_t N> void array(const boost::array<double, N>& a) {
+    align(sizeof(double));
+    cdr_.serializeArray(a.data(), N);
   }
-  template <std::size_t N> void array(const boost::array<double, N>& a) { cdr_.serializeArray(a.data(), N); }
 
   Cdr take() const {
     const auto* begin = reinterpret_cast<const std::uint8_t*>(buffer_.getBuffer());
@@ -55,6 +54,10 @@ class CdrWriter {
   }
 
  private:
+  void align(std::size_t n) {
+    while ((cdr_.getSerializedDataLength() - 4) % n != 0) cdr_.serialize(std::uint8_t{0});
+  }
+
   fc::FastBuffer buffer_;  // grows as needed
   fc::Cdr cdr_;
 };

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <vector>
 
 #include "mmlio/io/cdr_messages.hpp"
 #include "mmlio/core/error.hpp"
@@ -68,6 +69,23 @@ TEST(Ros2Wire, OdometryFieldsSitWhereRos2sLayoutPutsThem) {
   EXPECT_DOUBLE_EQ(doubleAt(cdr, twist + 40), 0.3);
   EXPECT_DOUBLE_EQ(doubleAt(cdr, twist + 48 + 35 * 8), -1.0);
   EXPECT_EQ(cdr.size(), twist + 48 + 36 * 8);
+}
+
+TEST(Ros2Wire, PaddingIsZeroSoTheSameMessageGivesTheSameBytes) {
+  nav_msgs::Odometry odom;
+  odom.header.frame_id = "odom";      // padding at body offsets 17-19 ...
+  odom.child_frame_id = "base_link";  // ... and 34-39
+  for (int round = 0; round < 50; ++round) {
+    // Freed memory full of 0x55 for the encoder's buffer to be given.
+    for (std::size_t size = 64; size <= 4096; size *= 2) {
+      std::vector<char> dirty(size, 0x55);
+      dirty.clear();
+      dirty.shrink_to_fit();
+    }
+    const Cdr cdr = encode(odom);
+    for (const std::size_t at : {17, 18, 19, 34, 35, 36, 37, 38, 39})
+      ASSERT_EQ(cdr[4 + at], 0) << "padding byte at body offset " << at << ", round " << round;
+  }
 }
 
 TEST(Ros2Wire, APointCloudReadsBackThroughTheRos2BagDecoder) {
