@@ -300,7 +300,8 @@ double PoseGraph::routeLength(int a, int b) const {
   dist[a] = 0.0;
   open.push({0.0, a});
   while (!open.empty()) {
-    const auto [d, i] = open.top();
+    const double d = open.top().first;  // not a structured binding: the lambda below captures it
+    const int i = open.top().second;
     open.pop();
     if (i == b) return d;
     if (d > dist[i]) continue;
