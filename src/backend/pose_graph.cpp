@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "mmlio/core/log.hpp"
+#include "mmlio/core/so3.hpp"
 
 namespace mmlio::backend {
 namespace {
@@ -183,11 +184,9 @@ bool PoseGraph::fold(int i) {
   // per step would miss.
   const Eigen::Matrix3d R_ab = in->T_from_to.rotation(), R_bc = out->T_from_to.rotation();
   const Eigen::Vector3d p_bc = out->T_from_to.translation();
-  Eigen::Matrix3d p_bc_hat;
-  p_bc_hat << 0, -p_bc.z(), p_bc.y(), p_bc.z(), 0, -p_bc.x(), -p_bc.y(), p_bc.x(), 0;
   Matrix6d A = Matrix6d::Zero(), B = Matrix6d::Zero();
   A.topLeftCorner<3, 3>().setIdentity();
-  A.topRightCorner<3, 3>() = -R_ab * p_bc_hat;
+  A.topRightCorner<3, 3>() = -R_ab * so3::hat(p_bc);
   A.bottomRightCorner<3, 3>() = R_bc.transpose();
   B.topLeftCorner<3, 3>() = R_ab;
   B.bottomRightCorner<3, 3>().setIdentity();
@@ -250,9 +249,6 @@ bool PoseGraph::optimize() {
 void PoseGraph::placeFolded() {
   if (folded_count_ == 0) return;
   const auto correctionAt = [&](int k) { return pose(k) * nodes_[k].T_world_body_odom.inverse(); };
-  const auto stepLength = [&](int i) {  // odometry from i - 1 to i
-    return (nodes_[i].T_world_body_odom.translation() - nodes_[i - 1].T_world_body_odom.translation()).norm();
-  };
   const int n = static_cast<int>(nodes_.size());
   for (int a = 0, b = 1; b < n; ++b) {
     if (folded_[b]) continue;
@@ -260,10 +256,10 @@ void PoseGraph::placeFolded() {
       const Eigen::Isometry3d C_a = correctionAt(a), C_b = correctionAt(b);
       const Eigen::Quaterniond q_a(C_a.rotation()), q_b(C_b.rotation());
       double total = 0.0;
-      for (int i = a + 1; i <= b; ++i) total += stepLength(i);
+      for (int i = a; i < b; ++i) total += odometryStep(i);
       double along = 0.0;
       for (int i = a + 1; i < b; ++i) {
-        along += stepLength(i);
+        along += odometryStep(i - 1);
         const double w = total > 0.0 ? along / total : static_cast<double>(i - a) / (b - a);
         Eigen::Isometry3d C = Eigen::Isometry3d::Identity();
         C.linear() = q_a.slerp(w, q_b).toRotationMatrix();
@@ -281,14 +277,15 @@ void PoseGraph::dropCloud(int i) {
   cloud.shrink_to_fit();
 }
 
+double PoseGraph::odometryStep(int i) const {
+  return (nodes_[i + 1].T_world_body_odom.translation() - nodes_[i].T_world_body_odom.translation()).norm();
+}
+
 double PoseGraph::routeLength(int a, int b) const {
   const int n = static_cast<int>(nodes_.size());
   if (a < 0 || b < 0 || a >= n || b >= n)
     throw std::invalid_argument("PoseGraph::routeLength: keyframe index out of range");
   // Dijkstra over the chain of odometry edges plus the loops' shortcuts.
-  const auto stepLength = [&](int i) {  // odometry edge i -> i + 1
-    return (nodes_[i + 1].T_world_body_odom.translation() - nodes_[i].T_world_body_odom.translation()).norm();
-  };
   std::vector<std::vector<int>> shortcuts(nodes_.size());
   for (const Edge& e : loops_) {
     shortcuts[e.from].push_back(e.to);
@@ -311,8 +308,8 @@ double PoseGraph::routeLength(int a, int b) const {
         open.push({dist[j], j});
       }
     };
-    if (i + 1 < n) relax(i + 1, stepLength(i));
-    if (i > 0) relax(i - 1, stepLength(i - 1));
+    if (i + 1 < n) relax(i + 1, odometryStep(i));
+    if (i > 0) relax(i - 1, odometryStep(i - 1));
     for (const int j : shortcuts[i]) relax(j, 0.0);
   }
   return dist[b];  // the chain connects every keyframe: not reached

@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "../common/box_scene.hpp"
 #include "mmlio/backend/loop_plausibility.hpp"
 
 namespace mmlio::backend {
@@ -12,12 +13,7 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-Eigen::Isometry3d pose2d(double x, double y, double yaw) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  T.translation() = Eigen::Vector3d(x, y, 0);
-  return T;
-}
+using box_scene::pose;
 
 /// Laps of a 10 m square in 1 m steps (40 keyframes a lap), the odometry exact.
 PoseGraph laps(int n) {
@@ -28,7 +24,7 @@ PoseGraph laps(int n) {
     node.stamp_ns = static_cast<Stamp>(i + 1) * 1'000'000'000;
     node.T_world_body_odom = T;
     graph.addKeyframe(node);
-    T = T * pose2d(1.0, 0, i % 10 == 9 ? M_PI / 2 : 0.0);
+    T = T * pose(1.0, 0, 0, i % 10 == 9 ? M_PI / 2 : 0.0);
   }
   return graph;
 }
@@ -53,18 +49,18 @@ TEST(LoopPlausibility, TheOdometrysOwnRelativePoseIsPlausible) {
 
 TEST(LoopPlausibility, ARoomMatchedTurnedHalfRoundIsRefusedAfterAnyRoute) {
   PoseGraph graph = laps(25);  // a kilometre
-  const LoopResult flipped = loopAt(graph, 3, 1000, pose2d(0.2, 0.1, M_PI));
+  const LoopResult flipped = loopAt(graph, 3, 1000, pose(0.2, 0.1, 0, M_PI));
   const LoopCorrection c = loopCorrection(graph, flipped, MappingConfig{});
   EXPECT_NEAR(c.correction_deg, 180.0, 1e-6);
   EXPECT_LT(c.correction_m, c.allowed_m);  // the shift alone would pass
   EXPECT_FALSE(c.plausible());
   // A small genuine correction over the same route passes.
-  EXPECT_TRUE(loopCorrection(graph, loopAt(graph, 3, 1000, pose2d(0.2, 0.1, 2 * kDeg)), MappingConfig{}).plausible());
+  EXPECT_TRUE(loopCorrection(graph, loopAt(graph, 3, 1000, pose(0.2, 0.1, 0, 2 * kDeg)), MappingConfig{}).plausible());
 }
 
 TEST(LoopPlausibility, LoopsAlreadyClosedTightenTheBoundOfTheNextOne) {
   PoseGraph graph = laps(3);
-  const LoopResult shifted = loopAt(graph, 2, 118, pose2d(0.6, 0, 0));  // 0.6 m off, 116 m travelled
+  const LoopResult shifted = loopAt(graph, 2, 118, pose(0.6, 0, 0, 0));  // 0.6 m off, 116 m travelled
   EXPECT_TRUE(loopCorrection(graph, shifted, MappingConfig{}).plausible());
   // Each lap's start tied to the first: 2 and 118 are then 4 m apart through the graph.
   graph.addLoop(0, 40, Eigen::Isometry3d::Identity(), isotropicInformation(0.01, 0.001));
@@ -73,7 +69,7 @@ TEST(LoopPlausibility, LoopsAlreadyClosedTightenTheBoundOfTheNextOne) {
   const LoopCorrection c = loopCorrection(graph, shifted, MappingConfig{});
   EXPECT_NEAR(c.route_m, 4.0, 1e-9);
   EXPECT_FALSE(c.plausible());
-  EXPECT_TRUE(loopCorrection(graph, loopAt(graph, 2, 118, pose2d(0.05, 0, 0.5 * kDeg)), MappingConfig{}).plausible());
+  EXPECT_TRUE(loopCorrection(graph, loopAt(graph, 2, 118, pose(0.05, 0, 0, 0.5 * kDeg)), MappingConfig{}).plausible());
 }
 
 }  // namespace

@@ -98,6 +98,8 @@ class PoseGraph {
     Matrix6d covariance;        // odometry edges: of T_from_to, kept to compose folded edges
   };
   static Edge edge(int from, int to, const Eigen::Isometry3d& T_from_to, const Matrix6d& information);
+  /// Distance the odometry travelled from keyframe i to i + 1, m.
+  double odometryStep(int i) const;
   /// Sets the pose of every folded keyframe from its kept neighbours' (see fold()).
   void placeFolded();
 
