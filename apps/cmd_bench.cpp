@@ -41,35 +41,22 @@ double residentMb() {  // now, not the peak: /proc/self/statm's second field, in
   return static_cast<double>(resident_pages) * static_cast<double>(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
 }
 
-/// One tracked sweep of the run: when (bag and wall time), what the sweep loop spent on it, the
-/// resident memory after it.
-struct CurvePoint {
-  double bag_s, wall_s, sweep_ms, rss_mb;
+/// Per pass of a replayed bag: sweeps, mean ms per sweep and resident memory at its end, so that
+/// growth with revisits and time reads off directly. Kept as sums, not per sweep: the bench must
+/// not grow with the run it measures.
+struct PassFigures {
+  std::size_t sweeps = 0;
+  double sum_ms = 0.0, rss_mb = 0.0;
 };
 
-/// Per pass of a replayed bag (equal spans of bag time): mean ms per sweep and resident memory at
-/// its end, so that growth with revisits and time reads off directly.
-void printPasses(const std::vector<CurvePoint>& curve, int passes) {
-  if (curve.empty() || passes < 2) return;
-  const double span = (curve.back().bag_s + 1e-9) / passes;
+void printPasses(const std::vector<PassFigures>& passes) {
+  if (passes.size() < 2) return;
   std::printf("\npass   sweeps   mean ms per sweep (sweep loop)   resident MB at its end\n");
-  std::size_t i = 0;
-  for (int p = 0; p < passes; ++p) {
-    double sum_ms = 0, rss = 0;
-    std::size_t n = 0;
-    for (; i < curve.size() && curve[i].bag_s < (p + 1) * span; ++i, ++n) {
-      sum_ms += curve[i].sweep_ms;
-      rss = curve[i].rss_mb;
-    }
-    std::printf("%4d %8zu %18.2f %30.0f\n", p + 1, n, n ? sum_ms / static_cast<double>(n) : 0.0, rss);
+  for (std::size_t p = 0; p < passes.size(); ++p) {
+    const PassFigures& f = passes[p];
+    std::printf("%4zu %8zu %18.2f %30.0f\n", p + 1, f.sweeps, f.sweeps ? f.sum_ms / static_cast<double>(f.sweeps) : 0.0,
+                f.rss_mb);
   }
-}
-
-void writeCurve(const std::string& path, const std::vector<CurvePoint>& curve) {
-  std::ofstream out(path);
-  out << "bag_s,wall_s,sweep_ms,rss_mb\n";
-  for (const CurvePoint& c : curve) out << c.bag_s << ',' << c.wall_s << ',' << c.sweep_ms << ',' << c.rss_mb << '\n';
-  if (!out) throw Error("cannot write the curve to '" + path + "'");
 }
 
 double cpuSeconds() {  // user + system time of every thread of this process so far
@@ -89,19 +76,35 @@ void bench(const BenchArgs& a) {
   options.mode = a.mode;
   options.progress = false;
   options.replays = a.replays;
-  if (!a.curve.empty() && !std::ofstream(a.curve)) throw Error("cannot write the curve to '" + a.curve + "'");
-  std::vector<CurvePoint> curve;
+  std::ofstream curve;                    // every sweep's bag time, wall time, ms and resident MB, written as it comes
+  const auto startCurve = [&curve, &a] {  // (re)started: it holds the last repeat
+    curve.close();
+    curve.open(a.curve);
+    curve << "bag_s,wall_s,sweep_ms,rss_mb\n";
+    if (!curve) throw Error("cannot write the curve to '" + a.curve + "'");
+  };
+  if (!a.curve.empty()) startCurve();  // a bad path fails before the run
+  std::vector<PassFigures> passes;
   Stamp first_ns = 0;
   Stopwatch curve_wall;
-  options.on_sweep = [&](Stamp stamp_ns, const StageTimes& times_ms) {
-    if (curve.empty()) first_ns = stamp_ns;
+  options.on_sweep = [&](Stamp stamp_ns, const StageTimes& times_ms, int replay) {
+    if (first_ns == 0) first_ns = stamp_ns;
     double ms = 0;
     for (const auto& stage : times_ms) ms += stage.second;
-    curve.push_back({toSec(stamp_ns - first_ns), curve_wall.elapsedMs() * 1e-3, ms, residentMb()});
+    const double rss_mb = residentMb();
+    if (passes.size() <= static_cast<std::size_t>(replay)) passes.resize(static_cast<std::size_t>(replay) + 1);
+    PassFigures& pass = passes[static_cast<std::size_t>(replay)];
+    ++pass.sweeps;
+    pass.sum_ms += ms;
+    pass.rss_mb = rss_mb;
+    if (curve.is_open())
+      curve << toSec(stamp_ns - first_ns) << ',' << curve_wall.elapsedMs() * 1e-3 << ',' << ms << ',' << rss_mb << '\n';
   };
   for (int pass = 1; pass <= a.repeat; ++pass) {
-    curve.clear();
+    passes.clear();
+    first_ns = 0;
     curve_wall = Stopwatch();
+    if (!a.curve.empty() && pass > 1) startCurve();
     Stopwatch wall;
     const double cpu0 = cpuSeconds();
     const pipeline::RunResult r = pipeline::runBag(options);
@@ -114,8 +117,8 @@ void bench(const BenchArgs& a) {
         pass, a.repeat, r.timing.sweeps(), bag_s, wall_s, bag_s / std::max(1e-9, wall_s), cpu_s,
         bag_s / std::max(1e-9, cpu_s), peakRssMb());
     if (pass == a.repeat) {
-      printPasses(curve, a.replays);
-      if (!a.curve.empty()) writeCurve(a.curve, curve);
+      printPasses(passes);
+      if (curve.is_open() && !curve.flush()) throw Error("cannot write the curve to '" + a.curve + "'");
       std::cout << "\nsweep loop (odometry; the back end's hand-off)\n" << r.timing.table();
       std::cout << "\nmapping back end (its own thread)\n" << r.backend_timing.table();
     }

@@ -84,7 +84,7 @@ void MappingBackend::finish() {
 
 void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
   const Eigen::Isometry3d T_world_body = sweep.state.pose();
-  odometry_.push_back({sweep.state.stamp_ns, T_world_body});
+  newest_ = {sweep.state.stamp_ns, T_world_body};
   if (sweep.keyframe || submaps_.empty()) {
     backend::KeyframeNode node;
     node.stamp_ns = sweep.state.stamp_ns;
@@ -157,20 +157,19 @@ MapAccumulator& MappingBackend::openAccumulator(const std::string& key) {
   return open_.try_emplace(key, cfg_.map_leaf_m).first->second;
 }
 
-Trajectory MappingBackend::correctedTrajectory() const {
-  if (graph_.loops() == 0) return odometry_.trajectory();
+Trajectory MappingBackend::corrected(const PoseLog& odometry) const {
+  if (graph_.loops() == 0) return odometry.trajectory();
   Trajectory out;
-  out.reserve(odometry_.size());
-  odometry_.forEach([&](const StampedPose& p) {
+  out.reserve(odometry.size());
+  odometry.forEach([&](const StampedPose& p) {
     out.push_back({p.stamp_ns, graph_.correct(p.stamp_ns, p.T_world_body)});
   });
   return out;
 }
 
 Eigen::Isometry3d MappingBackend::correction() const {
-  if (graph_.loops() == 0 || odometry_.empty()) return Eigen::Isometry3d::Identity();
-  const StampedPose last = odometry_.back();
-  return graph_.correct(last.stamp_ns, last.T_world_body) * last.T_world_body.inverse();
+  if (graph_.loops() == 0) return Eigen::Isometry3d::Identity();  // (a loop implies newest_ is set)
+  return graph_.correct(newest_.stamp_ns, newest_.T_world_body) * newest_.T_world_body.inverse();
 }
 
 void MappingBackend::closeSubmap() {

@@ -77,7 +77,6 @@ RunResult runBag(const RunOptions& options) {
 
   io::BagSource source(options.bag_path, config::bagSourceOptions(cfg, mode));
   System system(cfg, mode);
-  system.setTimingObserver(options.on_sweep);
   const estimator::Odometry& odometry = system.odometry();
   ProgressBar progress("mmlio run", options.progress);
   Stopwatch wall;
@@ -90,6 +89,10 @@ RunResult runBag(const RunOptions& options) {
     io::SensorEvent event;
     std::size_t events = 0;
     const Stamp period_ns = source.endNs() - source.beginNs() + fromSec(1.0);
+    if (options.on_sweep)
+      system.setTimingObserver([&options, begin_ns = source.beginNs(), period_ns](Stamp end_ns, const StageTimes& t) {
+        options.on_sweep(end_ns, t, static_cast<int>(std::max<Stamp>(0, end_ns - begin_ns) / period_ns));
+      });
     for (int replay = 0; replay < std::max(1, options.replays); ++replay) {
       // Replays re-open the bag and shift its stamps past the previous pass.
       std::unique_ptr<io::BagSource> again;
@@ -124,17 +127,17 @@ RunResult runBag(const RunOptions& options) {
     else
       system.flush();  // an interrupted run's last sweeps may lack IMU: they are left out
   } catch (const Error& e) {
-    if (system.odometryTrajectory().empty()) throw;
+    if (system.posesTracked() == 0) throw;
     result.complete = false;
     result.error = e.what();
-    log::emit(log::Level::kError, "stopped early: ", e.what(), " (writing the ", system.odometryTrajectory().size(),
+    log::emit(log::Level::kError, "stopped early: ", e.what(), " (writing the ", system.posesTracked(),
               " poses computed so far)");
   }
   system.finish();
-  progress.finish(std::to_string(system.sweepsProcessed()) + " sweeps, " +
-                  std::to_string(system.odometryTrajectory().size()) + " poses");
+  progress.finish(std::to_string(system.sweepsProcessed()) + " sweeps, " + std::to_string(system.posesTracked()) +
+                  " poses");
 
-  if (system.odometryTrajectory().empty() && result.complete) {
+  if (system.posesTracked() == 0 && result.complete) {
     throw Error(odometry.initialized()
                     ? "no sweep could be tracked in " + options.bag_path
                     : "IMU initialisation never succeeded in " + options.bag_path + ": " + odometry.imuInit().message);

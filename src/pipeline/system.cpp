@@ -38,7 +38,7 @@ void System::onSweep(estimator::SweepResult r) {
   else
     ++sweeps_.tracked;
   Stopwatch handoff;
-  odometry_poses_.push_back({online_.externalStamp(r.state.stamp_ns), r.state.pose()});
+  odometry_poses_.push_back({r.state.stamp_ns, r.state.pose()});
   degeneracy_.add(r);
   dynamic_.sweeps_judged += r.judged_for_movers;
   dynamic_.feature_points_rejected += r.dynamic_points;
@@ -55,7 +55,7 @@ void System::onSweep(estimator::SweepResult r) {
   StageTimes times = r.times_ms;
   const Stamp stamp_ns = r.state.stamp_ns;
   RunReport::SweepSample sample;
-  sample.stamp_ns = odometry_poses_.back().stamp_ns;
+  sample.stamp_ns = online_.externalStamp(stamp_ns);
   for (const auto& l : r.lidars) {
     sample.edges += static_cast<float>(l.edges);
     sample.planes += static_cast<float>(l.planes);
@@ -100,7 +100,7 @@ Trajectory System::inputTime(Trajectory trajectory) const {
 }
 
 Trajectory System::trajectory() const {
-  return inputTime(mapping_.read([](const backend::MappingBackend& b) { return b.correctedTrajectory(); }));
+  return inputTime(mapping_.read([this](const backend::MappingBackend& b) { return b.corrected(odometry_poses_); }));
 }
 
 Stamp System::externalStamp(Stamp internal_ns) const { return online_.externalStamp(internal_ns); }
@@ -166,9 +166,10 @@ RunReport System::report(Stamp stream_end_ns, const TrustLimits& limits) const {
 void System::judgeTrust(RunReport* r, Stamp stream_end_ns, const TrustLimits& limits) const {
   const PoseLog& poses = odometry_poses_;
   if (poses.empty()) return;
-  const double span_s = toSec(stream_end_ns - poses.front().stamp_ns);
+  const Stamp first_ns = externalStamp(poses.front().stamp_ns), last_ns = externalStamp(poses.back().stamp_ns);
+  const double span_s = toSec(stream_end_ns - first_ns);
   // The last sweep may end just past the stream's end (a --duration cut): never more than all of it covered.
-  r->sweeps.coverage = span_s > 0 ? std::min(1.0, toSec(poses.back().stamp_ns - poses.front().stamp_ns) / span_s) : 1.0;
+  r->sweeps.coverage = span_s > 0 ? std::min(1.0, toSec(last_ns - first_ns) / span_s) : 1.0;
   r->sweeps.degraded_fraction =
       static_cast<double>(r->sweeps.degraded) / static_cast<double>(std::max<std::size_t>(poses.size(), 1));
   const double limit = limits.max_degraded_fraction;
@@ -196,7 +197,7 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
   std::map<std::string, std::vector<Point>> lidar_maps;
   Stopwatch assembly;
   mapping_.read([&](const backend::MappingBackend& b) {
-    trajectory = inputTime(b.correctedTrajectory());
+    trajectory = inputTime(b.corrected(odometry_poses_));
     map_points = b.map();
     if (cfg_.mapping.dynamic_map) dynamic_map = b.dynamicMap();
     for (const std::string& lidar : b.lidarNames()) lidar_maps[lidar] = b.lidarMap(lidar);
@@ -205,7 +206,7 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
   report.dynamic.dynamic_map_points = dynamic_map.size();
 
   io::writeTum(dir + "trajectory.tum", trajectory);
-  io::writeTum(dir + "trajectory_odometry.tum", odometry_poses_.trajectory());  // before loop correction
+  io::writeTum(dir + "trajectory_odometry.tum", odometryTrajectory());  // before loop correction
   if (cfg_.output.write_kitti) {
     io::writeKitti(dir + "trajectory.kitti", trajectory);
     io::writeKittiTimes(dir + "times.txt", trajectory);

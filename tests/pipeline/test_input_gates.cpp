@@ -3,6 +3,7 @@
 // unusable output folder is refused before any work.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -360,9 +361,11 @@ TEST(RunBag, TellsItsTimingObserverEverySweepOnceInTimeOrderAcrossReplays) {
   options.replays = 2;
   options.bag_path = officeBag(sim, "mmlio_timing_observer.bag", [](const ImuSample&) { return true; });
   std::vector<Stamp> stamps;
+  std::vector<int> replays;
   double observed_ms = 0.0;
-  options.on_sweep = [&](Stamp sweep_end_ns, const StageTimes& times_ms) {
+  options.on_sweep = [&](Stamp sweep_end_ns, const StageTimes& times_ms, int replay) {
     stamps.push_back(sweep_end_ns);
+    replays.push_back(replay);
     for (const auto& stage : times_ms) observed_ms += stage.second;
   };
   const RunResult r = runBag(options);
@@ -370,6 +373,13 @@ TEST(RunBag, TellsItsTimingObserverEverySweepOnceInTimeOrderAcrossReplays) {
   EXPECT_EQ(stamps.size(), r.timing.sweeps());
   EXPECT_TRUE(std::adjacent_find(stamps.begin(), stamps.end(), std::greater_equal<Stamp>()) == stamps.end());
   EXPECT_GT(toSec(stamps.back() - stamps.front()), 1.5 * sim.durationS());  // both passes
+  // Each sweep is told its pass, which changes where the bag starts again (sweeps 0.1 s apart, the
+  // passes 1 s apart).
+  ASSERT_EQ(replays.front(), 0);
+  ASSERT_EQ(replays.back(), 1);
+  EXPECT_TRUE(std::is_sorted(replays.begin(), replays.end()));
+  const std::size_t second = std::find(replays.begin(), replays.end(), 1) - replays.begin();
+  EXPECT_GT(toSec(stamps[second] - stamps[second - 1]), 0.5);
   double reported_ms = 0.0;
   const Json timing = r.timing.toJson();
   for (const auto& stage : timing.items())

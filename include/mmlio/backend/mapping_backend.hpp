@@ -43,7 +43,9 @@ class MappingBackend {
   /// After the last sweep: a loop check on the last keyframe if it has not had one.
   void finish();
 
-  Trajectory correctedTrajectory() const;
+  /// The odometry's poses (estimator stamps, as the sweeps carried them) corrected by the loops
+  /// closed so far. The log is the caller's: one run keeps its poses once.
+  Trajectory corrected(const PoseLog& odometry) const;
   /// The loops' correction at the newest odometry pose: T_world_corrected * T_world_odometry^-1
   /// (identity before the first loop). Live nodes publish it as map -> odom.
   Eigen::Isometry3d correction() const;
@@ -97,8 +99,8 @@ class MappingBackend {
   /// How many moved-in returns the odometry reported in world's cell.
   std::uint32_t moverReturns(const Eigen::Vector3d& world) const;
   GhostRemoval ghosts_;
-  MapAccumulator dynamic_;  // world frame, at the poses of the moment (map_leaf_m)
-  PoseLog odometry_;
+  MapAccumulator dynamic_;                                // world frame, at the poses of the moment (map_leaf_m)
+  StampedPose newest_{0, Eigen::Isometry3d::Identity()};  // the newest sweep's odometry pose
   Eigen::Isometry3d T_world_keyframe_ = Eigen::Isometry3d::Identity();
   std::size_t loop_attempts_ = 0;
   int last_checked_ = -1;

@@ -28,8 +28,9 @@ struct RunOptions {
   const std::atomic<bool>* stop = nullptr;  // set (e.g. by a signal handler): stop reading, write
                                             // what was computed, status "interrupted"
   TrustLimits trust;                        // beyond them RunResult::untrusted says why
-  System::TimingObserver on_sweep;          // every tracked sweep's stamp and stage times, on the reading
-                                            // thread (bench records its time-and-memory curve)
+  /// Every tracked sweep's stamp, stage times and pass of the bag (0 unless replayed), on the
+  /// reading thread (bench records its time-and-memory curve).
+  std::function<void(Stamp sweep_end_ns, const StageTimes& times_ms, int replay)> on_sweep;
 };
 
 struct RunResult {

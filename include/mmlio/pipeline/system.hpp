@@ -54,7 +54,7 @@ class System {
   void finish();
 
   /// Odometry poses (IMU frame, one per tracked sweep), not corrected by loops.
-  Trajectory odometryTrajectory() const { return odometry_poses_.trajectory(); }
+  Trajectory odometryTrajectory() const { return inputTime(odometry_poses_.trajectory()); }
   std::size_t posesTracked() const { return odometry_poses_.size(); }
   /// The same poses corrected by the loops closed so far.
   Trajectory trajectory() const;
@@ -98,7 +98,7 @@ class System {
   std::map<std::string, RunReport::LidarFigures> lidars_;
   StageStats timing_;
   std::vector<RunReport::SweepSample> timeline_;
-  PoseLog odometry_poses_;
+  PoseLog odometry_poses_;  // estimator stamps: the back end corrects them by its keyframes' stamps
   Stamp first_imu_ns_ = 0;
   std::string backend_error_;
   bool finished_ = false;
