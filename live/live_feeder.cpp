@@ -1,6 +1,7 @@
 #include "live_feeder.hpp"
 
 #include "mmlio/config/calibration_source.hpp"
+#include "mmlio/config/source_options.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
 #include "mmlio/core/so3.hpp"
@@ -45,13 +46,7 @@ LiveFeeder::LiveFeeder(const config::RigConfig& cfg, FeederOptions options, Outl
       system_(cfg, options_.mode, [this](const estimator::SweepResult& r) { onSweep(r); }) {
   lidars_ = config::activeLidars(cfg, system_.mode());
   for (const config::LidarConfig* l : lidars_) {
-    io::CloudDecodeOptions d;
-    d.sensor = l->name;
-    d.kind = l->kind();
-    d.min_range_m = l->min_range_m;
-    d.max_range_m = l->max_range_m;
-    d.num_rings = l->num_rings;
-    decode_.push_back(d);
+    decode_.push_back(config::decodeOptions(*l));
     last_stamp_ns_.push_back(0);
   }
   worker_ = std::thread([this] { run(); });

@@ -144,9 +144,10 @@ void BagSource::Impl::checkTopics(const BagSourceOptions& o,
   }
   for (std::size_t i = 0; i < o.lidars.size(); ++i) {
     const SourceLidar& l = o.lidars[i];
+    const std::string& name = l.decode.sensor;
     const std::string key = detail::normalizeTopic(l.topic);
-    if (streams.count(key)) throw Error("topic " + l.topic + " is configured twice (LiDAR '" + l.name + "')");
-    const std::string& t = lookup(l.topic, "LiDAR '" + l.name + "'");
+    if (streams.count(key)) throw Error("topic " + l.topic + " is configured twice (LiDAR '" + name + "')");
+    const std::string& t = lookup(l.topic, "LiDAR '" + name + "'");
     Stream s;
     s.lidar = static_cast<int>(i);
     s.topic = l.topic;
@@ -155,23 +156,17 @@ void BagSource::Impl::checkTopics(const BagSourceOptions& o,
     else if (isLivoxType(t)) {
       // A Livox driver's own message comes from a solid-state LiDAR: read as a spinning one, its
       // points would be given rings, scan lines and a sweep they do not have, without a word.
-      if (l.kind != LidarKind::kSolidState)
-        throw Error("topic " + l.topic + " (LiDAR '" + l.name + "') in " + path + " is " + t +
+      if (l.decode.kind != LidarKind::kSolidState)
+        throw Error("topic " + l.topic + " (LiDAR '" + name + "') in " + path + " is " + t +
                     ", a solid-state Livox LiDAR's message, but the LiDAR is declared as a spinning one: give it "
                     "type: livox (or check that the topics are not swapped)");
       s.type = Stream::Type::kLivox;
     } else
-      throw Error("topic " + l.topic + " (LiDAR '" + l.name + "') in " + path + " is " + t + ", expected " +
+      throw Error("topic " + l.topic + " (LiDAR '" + name + "') in " + path + " is " + t + ", expected " +
                   kPointCloud2 + " or " + kLivoxCustomMsgType);
     streams[key] = s;
-    CloudDecodeOptions d;
-    d.sensor = l.name;
-    d.kind = l.kind;
-    d.min_range_m = l.min_range_m;
-    d.max_range_m = l.max_range_m;
-    d.num_rings = l.num_rings;
-    decode.push_back(d);
-    stats[l.name] = DecodeStats{};
+    decode.push_back(l.decode);
+    stats[name] = DecodeStats{};
   }
 }
 

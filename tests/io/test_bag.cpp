@@ -89,9 +89,9 @@ std::string writeRigBag() {
 BagSourceOptions rigOptions() {
   BagSourceOptions o;
   o.imu_topic = "/livox/imu";
-  o.lidars.push_back({"velodyne", "/velodyne_points", LidarKind::kSpinning, 0.5, 100.0, 16});
-  o.lidars.push_back({"livox", "livox/lidar", LidarKind::kSolidState, 0.5, 100.0, 6});  // no leading '/'
-  o.lidars.push_back({"livox2", "/livox2/lidar", LidarKind::kSolidState, 0.5, 100.0, 6});
+  o.lidars.push_back({"/velodyne_points", {"velodyne", LidarKind::kSpinning, 0.5, 100.0, 16}});
+  o.lidars.push_back({"livox/lidar", {"livox", LidarKind::kSolidState, 0.5, 100.0, 6}});  // no leading '/'
+  o.lidars.push_back({"/livox2/lidar", {"livox2", LidarKind::kSolidState, 0.5, 100.0, 6}});
   return o;
 }
 
@@ -205,7 +205,7 @@ TEST(BagSource, RawRosbagOusterBagDecodesWithMetricImuAndSkipsAForeignMessage) {
   const std::string path = writeRawBag();
   BagSourceOptions o;
   o.imu_topic = "/imu";
-  o.lidars.push_back({"ouster", "/os_cloud_node/points", LidarKind::kSpinning, 0.5, 100.0, 16});
+  o.lidars.push_back({"/os_cloud_node/points", {"ouster", LidarKind::kSpinning, 0.5, 100.0, 16}});
   BagSource src(path, o);
   EXPECT_DOUBLE_EQ(src.accScale(), 1.0);
   SensorEvent e;
@@ -228,7 +228,7 @@ TEST(BagSource, RawRosbagOusterBagDecodesWithMetricImuAndSkipsAForeignMessage) {
 TEST(BagSource, ADamagedCloudAfterGoodOnesIsSkippedAndCountedAndReadingGoesOn) {
   BagSourceOptions o;
   o.imu_topic = "/imu";
-  o.lidars.push_back({"ouster", "/os_cloud_node/points", LidarKind::kSpinning, 0.5, 100.0, 16});
+  o.lidars.push_back({"/os_cloud_node/points", {"ouster", LidarKind::kSpinning, 0.5, 100.0, 16}});
   BagSource src(writeRawBag(1), o);
   SensorEvent e;
   std::vector<Stamp> starts;
@@ -398,7 +398,7 @@ TEST(BagSourceErrors, ACloudWhoseFieldsSayTheOtherKindOfLidarStopsTheRunSayingWh
   // A VLP-16's PointCloud2 (ring field) declared solid-state: its first cloud says so.
   const std::string path = writeRigBag();
   BagSourceOptions o = rigOptions();
-  o.lidars[0].kind = LidarKind::kSolidState;
+  o.lidars[0].decode.kind = LidarKind::kSolidState;
   const std::string msg = mmlio::testing::errorOf([&] {
     BagSource src(path, o);
     SensorEvent e;

@@ -59,8 +59,8 @@ std::vector<char> validBag(const std::string& path) {
 BagSourceOptions rig() {
   BagSourceOptions o;
   o.imu_topic = "/livox/imu";
-  o.lidars.push_back({"velodyne", "/velodyne_points", LidarKind::kSpinning, 0.5, 100.0, 16});
-  o.lidars.push_back({"livox", "/livox/lidar", LidarKind::kSolidState, 0.5, 100.0, 6});
+  o.lidars.push_back({"/velodyne_points", {"velodyne", LidarKind::kSpinning, 0.5, 100.0, 16}});
+  o.lidars.push_back({"/livox/lidar", {"livox", LidarKind::kSolidState, 0.5, 100.0, 6}});
   return o;
 }
 

@@ -17,16 +17,14 @@
 #include <vector>
 
 #include "mmlio/core/types.hpp"
+#include "mmlio/io/cloud_decoders.hpp"
 #include "mmlio/io/decode_stats.hpp"
 
 namespace mmlio::io {
 
 struct SourceLidar {
-  std::string name, topic;
-  LidarKind kind = LidarKind::kSpinning;
-  double min_range_m = 0.5;    // closer returns are dropped
-  double max_range_m = 100.0;  // farther returns are dropped
-  int num_rings = 16;          // rings assumed when a cloud has no `ring` field
+  std::string topic;
+  CloudDecodeOptions decode;  // its name (decode.sensor), kind and filters; the scan period is the bag's
 };
 
 struct BagSourceOptions {
@@ -38,7 +36,7 @@ struct BagSourceOptions {
 struct SensorEvent {
   enum class Kind { kImu, kLidar } kind = Kind::kImu;
   ImuSample imu;   // kImu: acceleration already in m/s^2
-  LidarScan scan;  // kLidar: scan.sensor = SourceLidar::name; never empty
+  LidarScan scan;  // kLidar: scan.sensor = SourceLidar::decode.sensor; never empty
 };
 
 class BagSource {
