@@ -7,31 +7,12 @@
 # Usage: live_node_test.sh MMLIO MMLIO_NODE CONFIG_DIR
 set -euo pipefail
 MMLIO="$1" NODE="$2" CONFIG_DIR="$3"
-export PATH="/usr/bin:/bin:$PATH"  # ROS1's Python tools need the system python3
+source "$(dirname "$0")/../../live/tests/live_test_common.sh"
 for tool in roscore rosbag rostopic rosservice; do
   command -v "$tool" > /dev/null || { echo "FAIL: $tool not found (Debian: ros-core; scripts/install-deps.sh)"; exit 1; }
 done
-
-work=$(mktemp -d /tmp/mmlio-live-test.XXXXXX)
+live_test_begin mmlio-live-test "$MMLIO" "$CONFIG_DIR"
 export ROS_HOME="$work/ros_home" ROS_LOG_DIR="$work/ros_log" ROS_IP=127.0.0.1  # no reliance on the host name
-pids=()
-cleanup() {
-  for p in "${pids[@]}"; do kill -INT "$p" 2> /dev/null || true; done
-  sleep 1
-  for p in "${pids[@]}"; do kill -KILL "$p" 2> /dev/null || true; done
-  rm -rf "$work"
-}
-trap cleanup EXIT
-fail() { echo "FAIL: $*"; for f in "$work"/*.log "$work"/*.txt; do echo "--- $f"; tail -20 "$f"; done; exit 1; }
-wait_for() {  # wait_for SECONDS COMMAND...: until COMMAND succeeds
-  local until=$((SECONDS + $1)); shift
-  until "$@" > /dev/null 2>&1; do [ $SECONDS -lt $until ] || return 1; sleep 0.3; done
-}
-
-"$MMLIO" -q simulate --scenario office --duration 30 --seed 5 --out "$work/sim" > /dev/null 2>&1 || fail "simulate"
-bag="$work/sim/office.bag" truth="$work/sim/office_truth.yaml" gt="$work/sim/office_gt.tum"
-"$MMLIO" -q run "$bag" --config "$CONFIG_DIR/hvi.yaml" --calib "$truth" --no-progress --out "$work/run" \
-  > "$work/run.log" 2>&1 || fail "mmlio run"
 
 port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
 export ROS_MASTER_URI="http://127.0.0.1:$port"
@@ -69,29 +50,18 @@ echo "$save" | grep -q "success: True" || fail "~save_map: $save"
   fail "~save_map wrote no trajectory, map or report"
 rm -f "$work/node/trajectory.tum"
 kill -INT "$record_pid"; wait "$record_pid" || true
-kill -INT "$node_pid"
-for _ in $(seq 100); do kill -0 "$node_pid" 2> /dev/null || break; sleep 0.3; done
-kill -0 "$node_pid" 2> /dev/null && fail "the node did not stop on SIGINT"
+stop_node "$node_pid"
 [ -s "$work/node/trajectory.tum" ] || fail "no trajectory written on shutdown"
 
-ate() { "$MMLIO" evaluate --gt "$gt" --est "$1" --json | python3 -c 'import json,sys; print(json.load(sys.stdin)["ate_rmse_m"])'; }
-run_ate=$(ate "$work/run/trajectory.tum")
-node_ate=$(ate "$work/node/trajectory.tum")
+run_ate=$(ate "$MMLIO" "$work/run/trajectory.tum")
+node_ate=$(ate "$MMLIO" "$work/node/trajectory.tum")
 
 python3 - "$work" "$run_ate" "$node_ate" << 'PY' || fail "checks above"
 import json, sys
 import rosbag
+from live_checks import check, finish, read_tum
 
 work, run_ate, node_ate = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])
-errors = []
-def check(ok, what):
-    print(("ok    " if ok else "FAIL  ") + what)
-    if not ok:
-        errors.append(what)
-
-def read_tum(path):
-    return [line.split() for line in open(path) if line.strip() and not line.startswith("#")]
-
 bag = rosbag.Bag(f"{work}/out.bag")
 info = bag.get_type_and_topic_info().topics
 types = {t: info[t].msg_type for t in info}
@@ -129,6 +99,6 @@ run_loops = json.load(open(f"{work}/run/report.json"))["mapping"].get("loops", [
 check(len(loops) >= 1 and len(loops) == len(run_loops), f"the node closed loops live ({len(loops)}; mmlio run {len(run_loops)})")
 check(node_ate <= 1.05 * run_ate + 1e-4, f"node ATE {100 * node_ate:.2f} cm within 5 % of mmlio run's {100 * run_ate:.2f} cm")
 check(report["input"]["queue_dropped"]["imu"] == 0 and report["input"]["queue_dropped"]["scans"] == 0, "no message dropped")
-sys.exit(1 if errors else 0)
+finish()
 PY
 echo "PASS"

@@ -8,23 +8,9 @@
 # Usage: live_ros2_test.sh MMLIO MMLIO_ROS2 ROS2_PLAY ROS2_SAVE_MAP CYCLONE_LISTEN CONFIG_DIR
 set -euo pipefail
 MMLIO="$1" NODE="$2" PLAY="$3" SAVE="$4" LISTEN="$5" CONFIG_DIR="$6"
-export PATH="/usr/bin:/bin:$PATH"
-work=$(mktemp -d /tmp/mmlio-ros2-test.XXXXXX)
+source "$(dirname "$0")/../../live/tests/live_test_common.sh"
 export ROS_DOMAIN_ID=$((100 + $$ % 100))  # away from a user's domain 0 and from parallel runs
-pids=()
-cleanup() {
-  for p in "${pids[@]}"; do kill -INT "$p" 2> /dev/null || true; done
-  sleep 1
-  for p in "${pids[@]}"; do kill -KILL "$p" 2> /dev/null || true; done
-  [ -n "${KEEP_WORK:-}" ] || rm -rf "$work"
-}
-trap cleanup EXIT
-fail() { echo "FAIL: $*"; for f in "$work"/*.log; do echo "--- $f"; tail -20 "$f"; done; exit 1; }
-
-"$MMLIO" -q simulate --scenario office --duration 30 --seed 5 --out "$work/sim" > /dev/null 2>&1 || fail "simulate"
-bag="$work/sim/office.bag" truth="$work/sim/office_truth.yaml" gt="$work/sim/office_gt.tum"
-"$MMLIO" -q run "$bag" --config "$CONFIG_DIR/hvi.yaml" --calib "$truth" --no-progress --out "$work/run" \
-  > "$work/run.log" 2>&1 || fail "mmlio run"
+live_test_begin mmlio-ros2-test "$MMLIO" "$CONFIG_DIR"
 
 mkdir -p "$work/listen"
 "$LISTEN" "$ROS_DOMAIN_ID" mmlio "$work/listen" > "$work/listen.log" 2>&1 &
@@ -42,32 +28,21 @@ echo "$reply" | grep -q "success: true" || fail "save_map: $reply"
 [ -s "$work/node/trajectory.tum" ] && [ -s "$work/node/map.pcd" ] && [ -s "$work/node/report.json" ] ||
   fail "save_map wrote no trajectory, map or report"
 rm -f "$work/node/trajectory.tum"
-kill -INT "$node_pid"
-for _ in $(seq 100); do kill -0 "$node_pid" 2> /dev/null || break; sleep 0.3; done
-kill -0 "$node_pid" 2> /dev/null && fail "the node did not stop on SIGINT"
+stop_node "$node_pid"
 wait "$node_pid" || fail "the node exited with an error"
 [ -s "$work/node/trajectory.tum" ] && [ -s "$work/node/map.pcd" ] && [ -s "$work/node/report.json" ] ||
   fail "no trajectory, map or report written on SIGINT"
 kill -TERM "$listen_pid"
 wait "$listen_pid" || fail "cyclone_listen"
 
-ate() { "$MMLIO" evaluate --gt "$gt" --est "$1" --json | python3 -c 'import json,sys; print(json.load(sys.stdin)["ate_rmse_m"])'; }
-run_ate=$(ate "$work/run/trajectory_odometry.tum")
-peer_ate=$(ate "$work/listen/odometry.tum")
+run_ate=$(ate "$MMLIO" "$work/run/trajectory_odometry.tum")
+peer_ate=$(ate "$MMLIO" "$work/listen/odometry.tum")
 
 python3 - "$work" "$run_ate" "$peer_ate" << 'PY' || fail "checks above"
 import json, sys
+from live_checks import check, finish, read_tum
 
 work, run_ate, peer_ate = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])
-errors = []
-def check(ok, what):
-    print(("ok    " if ok else "FAIL  ") + what)
-    if not ok:
-        errors.append(what)
-
-def read_tum(path):
-    return [line.split() for line in open(path) if line.strip() and not line.startswith("#")]
-
 s = json.load(open(f"{work}/listen/summary.json"))
 run_odo = read_tum(f"{work}/run/trajectory_odometry.tum")
 n = s["odometry_messages"]
@@ -93,6 +68,6 @@ report = json.load(open(f"{work}/node/report.json"))
 run_imu = json.load(open(f"{work}/run/report.json"))["input"]["imu_messages"]
 check(report["input"]["imu_messages"] >= 0.99 * run_imu, f"IMU samples received: {report['input']['imu_messages']} of {run_imu}")
 check(report["input"]["queue_dropped"]["imu"] == 0 and report["input"]["queue_dropped"]["scans"] == 0, "no message dropped")
-sys.exit(1 if errors else 0)
+finish()
 PY
 echo "PASS"
