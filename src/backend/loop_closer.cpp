@@ -172,7 +172,7 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
   return v;
 }
 
-LoopResult LoopCloser::detect(const PoseGraph& graph, int query) const {
+LoopResult LoopCloser::detect(const PoseGraph& graph, int query, const HeadingCheck& plausible_heading) const {
   LoopResult result;
   result.query = query;
   if (query < 0 || query >= static_cast<int>(graph.size())) {
@@ -221,13 +221,19 @@ LoopResult LoopCloser::detect(const PoseGraph& graph, int query) const {
     const bool already =
         std::any_of(candidates.begin(), candidates.end(), [&](const Candidate& c) { return c.index == best; });
     if (best >= 0 && !already && best_match.distance <= cfg_.max_descriptor_distance) {
-      Eigen::Isometry3d prior = Eigen::Isometry3d::Identity();
-      prior.linear() = Eigen::AngleAxisd(best_match.yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-      candidates.push_back({best, prior, false});
+      if (!plausible_heading || plausible_heading(best, best_match.yaw_rad, cfg_.descriptor_heading_tolerance_deg)) {
+        Eigen::Isometry3d prior = Eigen::Isometry3d::Identity();
+        prior.linear() = Eigen::AngleAxisd(best_match.yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+        candidates.push_back({best, prior, false});
+      } else {
+        ++result.candidates_refused;
+        result.reason = "descriptor candidate " + std::to_string(best) + " refused: its heading (" +
+                        fmt(best_match.yaw_rad * kRadToDeg) + " deg) is not one the estimate can have drifted into";
+      }
     }
   }
   if (candidates.empty()) {
-    result.reason = "no candidate";
+    if (result.reason.empty()) result.reason = "no candidate";
     return result;
   }
   for (const Candidate& c : candidates) {

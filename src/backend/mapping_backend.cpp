@@ -51,7 +51,10 @@ bool MappingBackend::plausibleCorrection(const backend::LoopResult& r) const {
 void MappingBackend::tryLoop(int k) {
   last_checked_ = k;
   ++loop_attempts_;
-  backend::LoopResult r = closer_->detect(graph_, k);
+  const auto heading = [this, k](int match, double yaw_rad, double slack_deg) {
+    return backend::plausibleHeading(graph_, match, k, yaw_rad, slack_deg, cfg_);
+  };
+  backend::LoopResult r = closer_->detect(graph_, k, heading);
   if (r.accepted && !plausibleCorrection(r)) {
     r.accepted = false;
     ++rejected_;
@@ -67,7 +70,7 @@ void MappingBackend::tryLoop(int k) {
         {toSec(graph_.node(r.query).stamp_ns - t0), toSec(graph_.node(r.match).stamp_ns - t0), r.fitness_m, r.overlap});
     log::emit(log::Level::kInfo, "loop closed: keyframe ", r.query, " -> ", r.match, " (fitness ", r.fitness_m,
               " m, overlap ", r.overlap, ")");
-  } else if (r.candidates_tried > 0) {
+  } else if (r.candidates_tried + r.candidates_refused > 0) {
     ++rejected_;
     log::emit(log::Level::kDebug, "loop candidate rejected for keyframe ", k, ": ", r.reason);
   }

@@ -133,6 +133,37 @@ TEST(LoopCloser, FindsARevisitByItsDescriptorWhenDriftIsLarge) {
   EXPECT_LT(angleOf(err), 0.2 * kDeg);
 }
 
+TEST(LoopCloser, ADescriptorCandidateWhoseHeadingIsRefusedIsNotVerified) {
+  // The revisit above, asked about its heading first: the descriptor's yaw (40 deg give or take
+  // the shift of seeing the place 0.6 m away) goes to the check with the configured tolerance.
+  const auto scene = testing::roomA();
+  const Eigen::Isometry3d T0 = pose(-2.0, 1.0, 1.0, 0.3);
+  const Eigen::Isometry3d T1 = T0 * pose(0.5, 0.3, 0.0, 40 * kDeg);
+  PoseGraph graph;
+  graph.addKeyframe(keyframe(0.0, T0, testing::scan(scene, T0, 40)));
+  const int q = graph.addKeyframe(keyframe(60.0, pose(30.0, 0, 1.0, 1.0), testing::scan(scene, T1, 41)));
+  int asked_match = -1;
+  double asked_yaw = 0.0, asked_slack = 0.0;
+  const auto refuse = [&](int match, double yaw_rad, double slack_deg) {
+    asked_match = match;
+    asked_yaw = yaw_rad;
+    asked_slack = slack_deg;
+    return false;
+  };
+  const LoopCloser closer(LoopCloser::Config{});
+  const LoopResult refused = closer.detect(graph, q, refuse);
+  EXPECT_FALSE(refused.accepted);
+  EXPECT_EQ(refused.candidates_tried, 0);
+  EXPECT_EQ(refused.candidates_refused, 1);
+  EXPECT_NE(refused.reason.find("refused"), std::string::npos) << refused.reason;
+  EXPECT_EQ(asked_match, 0);
+  EXPECT_NEAR(asked_yaw / kDeg, 40.0, 12.0);
+  EXPECT_DOUBLE_EQ(asked_slack, LoopCloser::Config{}.descriptor_heading_tolerance_deg);
+  const LoopResult allowed = closer.detect(graph, q, [](int, double, double) { return true; });
+  EXPECT_TRUE(allowed.accepted) << allowed.reason;
+  EXPECT_EQ(allowed.candidates_refused, 0);
+}
+
 TEST(ScanContext, SameSceneRotatedMatchesWithItsYaw) {
   const auto scene = testing::roomA();
   const Eigen::Isometry3d T0 = pose(-2.0, 1.0, 1.0, 0.3);

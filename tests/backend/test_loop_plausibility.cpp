@@ -1,6 +1,7 @@
 // A loop's correction is bounded by what odometry can drift over the route between its ends
 // through the graph: a room matched turned half round is refused at any distance, and a revisit
-// whose ends earlier loops already tie is held to a tight bound.
+// whose ends earlier loops already tie is held to a tight bound. A place descriptor's heading is
+// held to the same rotation bound before any ICP.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -70,6 +71,28 @@ TEST(LoopPlausibility, LoopsAlreadyClosedTightenTheBoundOfTheNextOne) {
   EXPECT_NEAR(c.route_m, 4.0, 1e-9);
   EXPECT_FALSE(c.plausible());
   EXPECT_TRUE(loopCorrection(graph, loopAt(graph, 2, 118, pose(0.05, 0, 0, 0.5 * kDeg)), MappingConfig{}).plausible());
+}
+
+TEST(LoopPlausibility, ADescriptorHeadingHalfRoundIsRefusedAndATiltedRigsHeadingIsNot) {
+  const PoseGraph graph = laps(25);  // keyframes 0 and 1000 at the same place, heading the same way
+  const MappingConfig cfg;
+  const double route_m = graph.routeLength(0, 1000);
+  const double allowed_deg = cfg.max_loop_rotation_base_deg + cfg.max_rotation_drift_deg_per_m * route_m;
+  EXPECT_TRUE(plausibleHeading(graph, 0, 1000, 0.0, 6.0, cfg));
+  EXPECT_TRUE(plausibleHeading(graph, 0, 1000, (allowed_deg + 5.0) * kDeg, 6.0, cfg));  // within the slack
+  EXPECT_FALSE(plausibleHeading(graph, 0, 1000, (allowed_deg + 7.0) * kDeg, 6.0, cfg));
+  EXPECT_FALSE(plausibleHeading(graph, 0, 1000, M_PI, 6.0, cfg));
+  EXPECT_FALSE(plausibleHeading(graph, 0, 1000, -M_PI + 0.01, 6.0, cfg));  // wraps round
+  // The same place seen with the rig pitched 20 deg: the heading is still the same.
+  PoseGraph tilted;
+  KeyframeNode a, b;
+  a.stamp_ns = 1'000'000'000;
+  b.stamp_ns = 2'000'000'000;
+  b.T_world_body_odom = pose(0.5, 0, 0, 30 * kDeg, 20 * kDeg);
+  tilted.addKeyframe(a);
+  tilted.addKeyframe(b);
+  EXPECT_TRUE(plausibleHeading(tilted, 0, 1, 30 * kDeg, 0.0, cfg));
+  EXPECT_FALSE(plausibleHeading(tilted, 0, 1, 50 * kDeg, 0.0, cfg));
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 //   is what rejects a repetitive corridor, where every door period aligns as well as the true one.
 
 #include <Eigen/Geometry>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -30,8 +31,9 @@ struct LoopResult {
   Eigen::Isometry3d T_match_query = Eigen::Isometry3d::Identity();  // for PoseGraph::addLoop(match, query, ...)
   Matrix6d information = Matrix6d::Identity();                      // of T_match_query (dp, dtheta)
   double fitness_m = 0, overlap = 0;
-  int candidates_tried = 0;
-  std::string reason;  // why accepted / why the last candidate was rejected
+  int candidates_tried = 0;    // verified by ICP
+  int candidates_refused = 0;  // refused before their verification (HeadingCheck)
+  std::string reason;          // why accepted / why the last candidate was rejected
 };
 
 class LoopCloser {
@@ -46,7 +48,10 @@ class LoopCloser {
     int max_distance_candidates = 3;       // nearest distance candidates verified per query
     bool use_descriptor = true;            // also try the best Scan-Context match
     double max_descriptor_distance = 0.2;  // Scan-Context distance (0..1) below which it is a candidate
-    double submap_voxel_m = 0.1;           // target downsampling
+    // How far a descriptor's heading may be off the truth: its 6 deg sectors, and the columns a
+    // place seen from a metre away shifts (8 deg in the descriptor test). Slack of HeadingCheck.
+    double descriptor_heading_tolerance_deg = 30.0;
+    double submap_voxel_m = 0.1;  // target downsampling
     // Reject below: degenerate direction (see IcpResult). Corridor-like places (weak along one
     // axis) give loops that slide: on the simulated corridor 0.03 raised the ATE 5.2 -> 10.7 cm.
     double min_translation_eigenvalue = 0.08;
@@ -71,9 +76,13 @@ class LoopCloser {
   LoopCloser();
   explicit LoopCloser(Config cfg);
 
+  /// Whether the estimate can have drifted into a descriptor candidate's heading (the yaw of its
+  /// T_match_query prior, rad) within `slack_deg`; a candidate it refuses is not verified.
+  using HeadingCheck = std::function<bool(int match, double yaw_rad, double slack_deg)>;
+
   /// Looks for a loop from keyframe `query` to an older keyframe of `graph`. Caches descriptors by
   /// keyframe index, so one LoopCloser serves one graph (not thread-safe).
-  LoopResult detect(const PoseGraph& graph, int query) const;
+  LoopResult detect(const PoseGraph& graph, int query, const HeadingCheck& plausible_heading = {}) const;
   /// Frees the cached descriptor of a keyframe that is no loop candidate any more (its cloud dropped).
   void forget(int keyframe);
 
