@@ -116,19 +116,27 @@ TEST(LoopCloser, RejectsAFeaturelessCorridorAtItsPriorAsTheFullCheckWould) {
   EXPECT_NE(full.reason.find("degenerate geometry (translation"), std::string::npos) << full.reason;
 }
 
-TEST(LoopCloser, FindsARevisitByItsDescriptorWhenDriftIsLarge) {
-  // The estimate is 30 m off (no distance candidate); the Scan Context finds the place and its yaw.
-  const auto scene = testing::roomA();
-  const Eigen::Isometry3d T0 = pose(-2.0, 1.0, 1.0, 0.3);
-  const Eigen::Isometry3d T1 = T0 * pose(0.5, 0.3, 0.0, 40 * kDeg);
+/// Room A seen again from 0.6 m away turned 40 deg, with the estimate 30 m off: no distance
+/// candidate, only the Scan Context can find the place.
+struct DriftedRevisit {
+  Eigen::Isometry3d T0 = pose(-2.0, 1.0, 1.0, 0.3);
+  Eigen::Isometry3d T1 = T0 * pose(0.5, 0.3, 0.0, 40 * kDeg);
   PoseGraph graph;
-  graph.addKeyframe(keyframe(0.0, T0, testing::scan(scene, T0, 40)));
-  const int q = graph.addKeyframe(keyframe(60.0, pose(30.0, 0, 1.0, 1.0), testing::scan(scene, T1, 41)));
-  const LoopResult r = LoopCloser(LoopCloser::Config{}).detect(graph, q);
+  int query = -1;
+  DriftedRevisit() {
+    const auto scene = testing::roomA();
+    graph.addKeyframe(keyframe(0.0, T0, testing::scan(scene, T0, 40)));
+    query = graph.addKeyframe(keyframe(60.0, pose(30.0, 0, 1.0, 1.0), testing::scan(scene, T1, 41)));
+  }
+};
+
+TEST(LoopCloser, FindsARevisitByItsDescriptorWhenDriftIsLarge) {
+  const DriftedRevisit w;
+  const LoopResult r = LoopCloser(LoopCloser::Config{}).detect(w.graph, w.query);
   report("descriptor", r);
   ASSERT_TRUE(r.accepted) << r.reason;
   EXPECT_EQ(r.match, 0);
-  const Eigen::Isometry3d err = (T0.inverse() * T1).inverse() * r.T_match_query;
+  const Eigen::Isometry3d err = (w.T0.inverse() * w.T1).inverse() * r.T_match_query;
   EXPECT_LT(err.translation().norm(), 0.02);
   EXPECT_LT(angleOf(err), 0.2 * kDeg);
 }
@@ -136,12 +144,7 @@ TEST(LoopCloser, FindsARevisitByItsDescriptorWhenDriftIsLarge) {
 TEST(LoopCloser, ADescriptorCandidateWhoseHeadingIsRefusedIsNotVerified) {
   // The revisit above, asked about its heading first: the descriptor's yaw (40 deg give or take
   // the shift of seeing the place 0.6 m away) goes to the check with the configured tolerance.
-  const auto scene = testing::roomA();
-  const Eigen::Isometry3d T0 = pose(-2.0, 1.0, 1.0, 0.3);
-  const Eigen::Isometry3d T1 = T0 * pose(0.5, 0.3, 0.0, 40 * kDeg);
-  PoseGraph graph;
-  graph.addKeyframe(keyframe(0.0, T0, testing::scan(scene, T0, 40)));
-  const int q = graph.addKeyframe(keyframe(60.0, pose(30.0, 0, 1.0, 1.0), testing::scan(scene, T1, 41)));
+  const DriftedRevisit w;
   int asked_match = -1;
   double asked_yaw = 0.0, asked_slack = 0.0;
   const auto refuse = [&](int match, double yaw_rad, double slack_deg) {
@@ -151,7 +154,7 @@ TEST(LoopCloser, ADescriptorCandidateWhoseHeadingIsRefusedIsNotVerified) {
     return false;
   };
   const LoopCloser closer(LoopCloser::Config{});
-  const LoopResult refused = closer.detect(graph, q, refuse);
+  const LoopResult refused = closer.detect(w.graph, w.query, refuse);
   EXPECT_FALSE(refused.accepted);
   EXPECT_EQ(refused.candidates_tried, 0);
   EXPECT_EQ(refused.candidates_refused, 1);
@@ -159,7 +162,7 @@ TEST(LoopCloser, ADescriptorCandidateWhoseHeadingIsRefusedIsNotVerified) {
   EXPECT_EQ(asked_match, 0);
   EXPECT_NEAR(asked_yaw / kDeg, 40.0, 12.0);
   EXPECT_DOUBLE_EQ(asked_slack, LoopCloser::Config{}.descriptor_heading_tolerance_deg);
-  const LoopResult allowed = closer.detect(graph, q, [](int, double, double) { return true; });
+  const LoopResult allowed = closer.detect(w.graph, w.query, [](int, double, double) { return true; });
   EXPECT_TRUE(allowed.accepted) << allowed.reason;
   EXPECT_EQ(allowed.candidates_refused, 0);
 }
