@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "mmlio/io/cdr_messages.hpp"
+#include "ros_messages.hpp"
 #include "mmlio/core/error.hpp"
 #include "ros2_wire.hpp"
 
@@ -89,25 +90,14 @@ TEST(Ros2Wire, PaddingIsZeroSoTheSameMessageGivesTheSameBytes) {
 }
 
 TEST(Ros2Wire, APointCloudReadsBackThroughTheRos2BagDecoder) {
-  sensor_msgs::PointCloud2 cloud;
-  cloud.header.stamp.sec = 42;
-  cloud.header.stamp.nsec = 7;
-  cloud.header.frame_id = "map";
-  const char* names[] = {"x", "y", "z", "intensity"};
-  for (std::uint32_t i = 0; i < 4; ++i) {
-    sensor_msgs::PointField f;
-    f.name = names[i];
-    f.offset = 4 * i;
-    f.datatype = sensor_msgs::PointField::FLOAT32;
-    f.count = 1;
-    cloud.fields.push_back(f);
+  // As the node publishes a registered sweep: x y z intensity, float32.
+  std::vector<Point> points(3);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    points[i].xyz = Eigen::Vector3f(1.5f * static_cast<float>(i), -2.f, 0.25f);
+    points[i].intensity = 10.f * static_cast<float>(i);
   }
-  cloud.height = 1;
-  cloud.width = 3;
-  cloud.point_step = 16;
-  cloud.row_step = 48;
-  cloud.is_dense = true;
-  for (int i = 0; i < 48; ++i) cloud.data.push_back(static_cast<std::uint8_t>(7 * i + 1));
+  const sensor_msgs::PointCloud2 cloud =
+      live::toPointCloud2(points, Eigen::Isometry3d::Identity(), 42'000'000'007, "map");
   const sensor_msgs::PointCloud2 back = io::decodePointCloud2Cdr(encode(cloud));
   EXPECT_EQ(back.header.stamp.sec, 42u);
   EXPECT_EQ(back.header.stamp.nsec, 7u);
