@@ -4,8 +4,9 @@
 // Candidates: (1) past keyframes within search_radius_m of the query in the current estimate and at
 // least min_time_gap_s older, nearest first; (2) the best Scan-Context match among the old-enough
 // keyframes (for when drift has moved the estimate away from the true place), its prior being the
-// descriptor's yaw at zero offset. Each is verified by point-to-plane ICP of the query cloud against
-// a submap of keyframes around the candidate, and accepted only if
+// descriptor's yaw at zero offset, unless the caller's HeadingCheck says drift cannot have turned
+// the estimate that far (a room matched turned half round). Each is verified by point-to-plane
+// ICP of the query cloud against a submap of keyframes around the candidate, and accepted only if
 //   fitness <= max_fitness_m, overlap >= min_overlap, the geometry constrains every horizontal
 //   direction (smallest normalised Hessian eigenvalue; a distance candidate clearly short of it
 //   already at its prior is rejected before the ICP), a distance candidate's correction from its

@@ -23,9 +23,9 @@ LoopCorrection loopCorrection(const PoseGraph& graph, const LoopResult& r, const
 
 /// Whether a place descriptor's heading of query seen from match (the yaw of T_match_query, rad)
 /// is within the rotation bound of loopCorrection of the estimate's, give or take slack_deg (how
-/// far the descriptor's heading may be off). Asked before a descriptor candidate's ICP verification, so a
-/// room matched turned half round costs no ICP. Compares headings only: a hand-held or stair
-/// rig's tilt is not the descriptor's to judge.
+/// far the descriptor's heading may be off). Asked before a descriptor candidate's ICP
+/// verification, so a room matched turned half round costs no ICP. Compares headings only: a
+/// hand-held or stair rig's tilt is not the descriptor's to judge.
 bool plausibleHeading(const PoseGraph& graph, int match, int query, double yaw_rad, double slack_deg,
                       const MappingConfig& cfg);
 
