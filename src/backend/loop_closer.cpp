@@ -87,11 +87,11 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
   // A distance candidate's prior is close to the alignment, which changes the weakest direction's
   // information only a little: a place that is clearly degenerate at the prior is rejected
   // without the ICP (in a corridor, most candidates). Descriptor priors (yaw only) are not.
+  IcpConfig at_pose = icp_;
+  at_pose.levels = 1;
+  at_pose.max_iterations_per_level = 0;  // only the final statistics (at the finest gate), at the pose given
   if (by_distance && cfg_.prior_eigenvalue_fraction > 0) {
-    IcpConfig at_prior = icp_;
-    at_prior.levels = 1;
-    at_prior.max_iterations_per_level = 0;  // only the final statistics, at the prior
-    const IcpResult probe = alignPointToPlane(source, target, prior, at_prior);
+    const IcpResult probe = alignPointToPlane(source, target, prior, at_pose);
     const double clearly_degenerate = cfg_.prior_eigenvalue_fraction * cfg_.min_translation_eigenvalue;
     if (probe.converged && probe.min_translation_eigenvalue < clearly_degenerate) {
       v.icp = probe;
@@ -100,7 +100,28 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
       return v;
     }
   }
-  v.icp = alignPointToPlane(source, target, prior, icp_);
+  // The prior can be a metre off, but after the ICP's coarsest level the pose is close to the final
+  // one and so is the weakest direction's information: a place still clearly short of it there is
+  // rejected before the finer levels, which cost the most.
+  IcpConfig staged = icp_;
+  IcpResult after_coarse;
+  bool degenerate_after_coarse = false;
+  if (by_distance && cfg_.coarse_eigenvalue_fraction > 0)
+    staged.continue_after_level = [&](int level, const Eigen::Isometry3d& T) {
+      if (level > 0) return true;
+      after_coarse = alignPointToPlane(source, target, T, at_pose);
+      degenerate_after_coarse =
+          after_coarse.converged &&
+          after_coarse.min_translation_eigenvalue < cfg_.coarse_eigenvalue_fraction * cfg_.min_translation_eigenvalue;
+      return !degenerate_after_coarse;
+    };
+  v.icp = alignPointToPlane(source, target, prior, staged);
+  if (degenerate_after_coarse) {
+    v.icp = after_coarse;
+    v.reason = "degenerate geometry after the coarse alignment (translation eigenvalue " +
+               fmt(after_coarse.min_translation_eigenvalue) + ")";
+    return v;
+  }
   const IcpResult& r = v.icp;
   if (!r.converged) {
     v.reason = "ICP did not converge (" + std::to_string(r.correspondences) + " correspondences)";

@@ -174,6 +174,10 @@ IcpResult alignPointToPlane(const std::vector<Eigen::Vector3d>& source, const Ic
       if (delta.head<3>().norm() < cfg.converged_translation_m && delta.tail<3>().norm() < cfg.converged_rotation_rad)
         break;
     }
+    if (level + 1 < levels && cfg.continue_after_level && !cfg.continue_after_level(level, T)) {
+      result.T_target_source = T;
+      return result;
+    }
   }
   // Final statistics at the finest gate, at the final pose.
   const double gate_sq = cfg.max_corr_fine_m * cfg.max_corr_fine_m;

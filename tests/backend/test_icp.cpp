@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <random>
+#include <vector>
 
 #include "mmlio/backend/point_to_plane_icp.hpp"
 #include "synthetic_scene.hpp"
@@ -54,6 +55,38 @@ TEST(PointToPlaneIcp, TwoThousandSpreadOutSourcePointsAlignAsWellAsAll) {
   EXPECT_LT(angleOf(err), 0.1 * kDeg);
   EXPECT_NEAR(few.fitness_m, all.fitness_m, 0.3 * all.fitness_m);
   EXPECT_NEAR(few.overlap, all.overlap, 0.05);
+}
+
+TEST(PointToPlaneIcp, ALevelObserverSeesEveryLevelButTheLastAndChangesNothingUnlessItStops) {
+  const auto scene = testing::roomA();
+  const Eigen::Isometry3d T_world_a = pose(-1.0, 0.5, 1.0, 0.2);
+  const Eigen::Isometry3d T_a_b = pose(0.6, -0.4, 0.05, 6 * kDeg);
+  const IcpTarget target(map::voxelCentroids(testing::scan(scene, T_world_a, 1), 0.1));
+  const auto cloud_b = testing::scan(scene, T_world_a * T_a_b, 2);
+  const IcpResult plain = alignPointToPlane(cloud_b, target, Eigen::Isometry3d::Identity());
+  IcpConfig watched;
+  std::vector<int> levels_seen;
+  watched.continue_after_level = [&](int level, const Eigen::Isometry3d&) {
+    levels_seen.push_back(level);
+    return true;
+  };
+  const IcpResult same = alignPointToPlane(cloud_b, target, Eigen::Isometry3d::Identity(), watched);
+  EXPECT_EQ(levels_seen, (std::vector<int>{0, 1}));  // 3 levels
+  ASSERT_TRUE(same.converged);
+  EXPECT_TRUE(same.T_target_source.isApprox(plain.T_target_source, 0.0));
+  EXPECT_EQ(same.iterations, plain.iterations);
+  EXPECT_EQ(same.min_translation_eigenvalue, plain.min_translation_eigenvalue);
+  IcpConfig stopped;
+  Eigen::Isometry3d after_coarse = Eigen::Isometry3d::Identity();
+  stopped.continue_after_level = [&](int, const Eigen::Isometry3d& T) {
+    after_coarse = T;
+    return false;
+  };
+  const IcpResult cut = alignPointToPlane(cloud_b, target, Eigen::Isometry3d::Identity(), stopped);
+  EXPECT_FALSE(cut.converged);
+  EXPECT_LT(cut.iterations, plain.iterations);
+  EXPECT_TRUE(cut.T_target_source.isApprox(after_coarse, 0.0));
+  EXPECT_LT((after_coarse.translation() - T_a_b.translation()).norm(), 0.1);  // the coarse level got close
 }
 
 TEST(PointToPlaneIcp, FlagsAFeaturelessCorridorAsDegenerateAlongItsAxis) {

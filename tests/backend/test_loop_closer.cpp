@@ -96,7 +96,8 @@ TEST(LoopCloser, RejectsARepetitiveCorridorShiftedAlongItsAxis) {
 
 TEST(LoopCloser, RejectsAFeaturelessCorridorAtItsPriorAsTheFullCheckWould) {
   // Plain walls along x: no alignment can fix the position along the corridor. The check at the
-  // prior says so without the ICP, and the full check (pre-check off) agrees.
+  // prior says so without the ICP, the check after the coarse level without the finer ones, and the
+  // full check (both off) agrees.
   const auto scene = testing::corridor(120.0, 4.0, /*doors=*/false);
   const Eigen::Isometry3d T0 = pose(0.0, 0.0, 1.0, 0.0);
   const Eigen::Isometry3d T1 = pose(0.5, 0.1, 1.0, 2 * kDeg);
@@ -108,8 +109,14 @@ TEST(LoopCloser, RejectsAFeaturelessCorridorAtItsPriorAsTheFullCheckWould) {
   report("plain corridor", early);
   EXPECT_FALSE(early.accepted);
   EXPECT_NE(early.reason.find("degenerate geometry at the prior"), std::string::npos) << early.reason;
-  LoopCloser::Config full_check;
-  full_check.prior_eigenvalue_fraction = 0.0;
+  LoopCloser::Config staged_check;
+  staged_check.prior_eigenvalue_fraction = 0.0;
+  const LoopResult staged = LoopCloser(staged_check).detect(graph, q);
+  report("plain corridor, after the coarse level", staged);
+  EXPECT_FALSE(staged.accepted);
+  EXPECT_NE(staged.reason.find("degenerate geometry after the coarse alignment"), std::string::npos) << staged.reason;
+  LoopCloser::Config full_check = staged_check;
+  full_check.coarse_eigenvalue_fraction = 0.0;
   const LoopResult full = LoopCloser(full_check).detect(graph, q);
   report("plain corridor, full check", full);
   EXPECT_FALSE(full.accepted);

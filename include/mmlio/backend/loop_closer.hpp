@@ -60,6 +60,10 @@ class LoopCloser {
     // min_translation_eigenvalue are rejected before the ICP (0: never). The alignment changes it
     // by a few percent (docs/speed_history.md), so only clear cases are cut short.
     double prior_eigenvalue_fraction = 0.67;
+    // ... and those below this fraction after the ICP's coarsest level, at the finest gate, before
+    // the finer levels (0: never): from there the final value is within a few percent (0.98-1.04x
+    // near the threshold over 62 candidates of four scenes, docs/speed_history.md).
+    double coarse_eigenvalue_fraction = 0.9;
     double max_correction_m = 5.0;     // distance candidates: ICP may move the prior at most this ...
     double max_correction_deg = 30.0;  // ... and rotate it at most this
     std::vector<double> ambiguity_shifts_m{1.5, 3.0, 4.5};  // restarts at +-these along both principal axes

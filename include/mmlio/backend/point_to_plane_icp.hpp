@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 #include <cstddef>
 #include <memory>
+#include <functional>
 #include <vector>
 
 #include "mmlio/map/kd_tree.hpp"
@@ -53,6 +54,9 @@ struct IcpConfig {
   double voxel_coarse_m = 0.5;     // source downsampling at the first level
   double voxel_fine_m = 0.1;       // ... at the last level
   int levels = 3;                  // gates and voxels interpolate geometrically
+  // Asked after each level but the last with the pose so far: false stops the alignment there
+  // (not converged). It only looks: an alignment it lets run is the one without it.
+  std::function<bool(int level, const Eigen::Isometry3d& T_target_source)> continue_after_level;
   int max_iterations_per_level = 20;
   double converged_translation_m = 1e-4;  // stop a level when the update is below both
   double converged_rotation_rad = 1e-5;
