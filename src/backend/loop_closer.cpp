@@ -90,10 +90,12 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
   IcpConfig at_pose = icp_;
   at_pose.levels = 1;
   at_pose.max_iterations_per_level = 0;  // only the final statistics (at the finest gate), at the pose given
+  const auto clearlyDegenerate = [this](const IcpResult& probe, double fraction) {
+    return probe.converged && probe.min_translation_eigenvalue < fraction * cfg_.min_translation_eigenvalue;
+  };
   if (by_distance && cfg_.prior_eigenvalue_fraction > 0) {
     const IcpResult probe = alignPointToPlane(source, target, prior, at_pose);
-    const double clearly_degenerate = cfg_.prior_eigenvalue_fraction * cfg_.min_translation_eigenvalue;
-    if (probe.converged && probe.min_translation_eigenvalue < clearly_degenerate) {
+    if (clearlyDegenerate(probe, cfg_.prior_eigenvalue_fraction)) {
       v.icp = probe;
       v.reason =
           "degenerate geometry at the prior (translation eigenvalue " + fmt(probe.min_translation_eigenvalue) + ")";
@@ -110,9 +112,7 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
     staged.continue_after_level = [&](int level, const Eigen::Isometry3d& T) {
       if (level > 0) return true;
       after_coarse = alignPointToPlane(source, target, T, at_pose);
-      degenerate_after_coarse =
-          after_coarse.converged &&
-          after_coarse.min_translation_eigenvalue < cfg_.coarse_eigenvalue_fraction * cfg_.min_translation_eigenvalue;
+      degenerate_after_coarse = clearlyDegenerate(after_coarse, cfg_.coarse_eigenvalue_fraction);
       return !degenerate_after_coarse;
     };
   v.icp = alignPointToPlane(source, target, prior, staged);

@@ -12,8 +12,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstddef>
-#include <memory>
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "mmlio/map/kd_tree.hpp"
