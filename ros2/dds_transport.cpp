@@ -13,10 +13,13 @@
 #include <fastdds/dds/topic/TopicDataType.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
 #include <fastdds/rtps/common/WriteParams.h>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 
 #include <atomic>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <map>
 
 #include "mmlio/core/error.hpp"
@@ -122,6 +125,40 @@ Qos sensorDataQos() { return {false, false, 5}; }
 Qos reliableQos(int depth) { return {true, false, depth}; }
 Qos latchedQos() { return {true, true, 1}; }
 
+Transport::Kind transportKind(const std::string& name) {
+  if (name == "udp") return Transport::Kind::kUdp;
+  if (name == "shm") return Transport::Kind::kSharedMemory;
+  if (name == "default") return Transport::Kind::kFastDdsDefault;
+  throw Error("transport '" + name + "' is not one of udp, shm, default");
+}
+
+std::uint32_t grantedReceiveBuffer(std::uint32_t bytes) {
+  std::ifstream in("/proc/sys/net/core/rmem_max");
+  std::uint64_t rmem_max = 0;
+  if (!(in >> rmem_max)) return 0;
+  return static_cast<std::uint32_t>(std::min<std::uint64_t>(bytes, rmem_max));
+}
+
+namespace {
+
+void configure(const Transport& t, dds::DomainParticipantQos* qos) {
+  if (t.kind == Transport::Kind::kFastDdsDefault) return;
+  qos->transport().use_builtin_transports = false;
+  if (t.kind == Transport::Kind::kSharedMemory) {
+    auto shm = std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>();
+    shm->segment_size(t.shm_segment_bytes);
+    qos->transport().user_transports.push_back(shm);
+  }
+  auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
+  udp->sendBufferSize = t.socket_buffer_bytes;
+  udp->receiveBufferSize = t.socket_buffer_bytes;
+  qos->transport().user_transports.push_back(udp);
+  qos->transport().send_socket_buffer_size = t.socket_buffer_bytes;
+  qos->transport().listen_socket_buffer_size = t.socket_buffer_bytes;
+}
+
+}  // namespace
+
 int domainIdFromEnvironment() {
   const char* env = std::getenv("ROS_DOMAIN_ID");
   if (env == nullptr || *env == '\0') return 0;
@@ -151,9 +188,11 @@ struct DdsParticipant::Impl {
   }
 };
 
-DdsParticipant::DdsParticipant(int domain_id, const std::string& name) : impl_(std::make_unique<Impl>()) {
+DdsParticipant::DdsParticipant(int domain_id, const std::string& name, const Transport& transport)
+    : impl_(std::make_unique<Impl>()) {
   dds::DomainParticipantQos qos = dds::PARTICIPANT_QOS_DEFAULT;
   qos.name(name);
+  configure(transport, &qos);
   impl_->participant =
       dds::DomainParticipantFactory::get_instance()->create_participant(static_cast<dds::DomainId_t>(domain_id), qos);
   if (impl_->participant == nullptr) throw Error("DDS: cannot join domain " + std::to_string(domain_id));

@@ -35,10 +35,32 @@ struct SampleIdentity {
   std::uint32_t sequence_low = 0;
 };
 
+/// How the participant's samples travel. Fast DDS's defaults, which rmw_fastrtps uses without a
+/// profile, lose large best-effort samples: a 0.9 MB cloud leaves as a burst of 64 KB fragments,
+/// more than a 512 KB shared-memory segment or the kernel's default 208 KB UDP receive buffer
+/// holds, and a sample missing one fragment is lost whole.
+struct Transport {
+  enum class Kind {
+    kFastDdsDefault,  // shared memory and UDP as Fast DDS ships them (what a driver on defaults uses)
+    kUdp,             // UDP only, with socket buffers that hold bursts of large samples
+    kSharedMemory,    // shared memory with a large segment, UDP as kUdp for other hosts
+  };
+  Kind kind = Kind::kUdp;
+  std::uint32_t socket_buffer_bytes = 8u << 20;  // asked of the kernel, which caps it at net.core.rmem_max
+  std::uint32_t shm_segment_bytes = 32u << 20;   // what this participant's writers may have in flight
+};
+
+/// "udp", "shm" or "default" (Fast DDS's own); throws mmlio::Error naming the choices otherwise.
+Transport::Kind transportKind(const std::string& name);
+
+/// The receive buffer the kernel grants a UDP socket that asks for `bytes` (net.core.rmem_max
+/// caps it; 0 if that cannot be read).
+std::uint32_t grantedReceiveBuffer(std::uint32_t bytes);
+
 class DdsParticipant {
  public:
   /// Joins DDS domain `domain_id` (ROS_DOMAIN_ID; 0-232). Throws mmlio::Error if DDS refuses.
-  explicit DdsParticipant(int domain_id, const std::string& name = "mmlio");
+  explicit DdsParticipant(int domain_id, const std::string& name = "mmlio", const Transport& transport = Transport());
   ~DdsParticipant();
   DdsParticipant(const DdsParticipant&) = delete;
   DdsParticipant& operator=(const DdsParticipant&) = delete;

@@ -38,6 +38,7 @@ constexpr const char* kDescription =
 struct Options {
   std::string config, calib, name = "mmlio";
   std::string livox_type = "livox_ros_driver2/msg/CustomMsg";
+  std::string transport = "udp";
   live::FeederOptions feeder;
   bool no_tf = false;
 };
@@ -133,6 +134,16 @@ void checkNodeName(const std::string& name) {
     throw Error("--name '" + name + "' is not a ROS 2 node name (letters, digits and '_', not starting with a digit)");
 }
 
+/// A VLP-16 sweep is 0.9 MB, an Ouster's several: a receive buffer below two such bursts drops
+/// clouds whenever the receive thread is a moment late.
+void warnOnSmallReceiveBuffer(const Transport& t) {
+  constexpr std::uint32_t kNeeded = 2u << 20;
+  const std::uint32_t granted = grantedReceiveBuffer(t.socket_buffer_bytes);
+  if (granted != 0 && granted < kNeeded)
+    log::warn("the kernel caps UDP receive buffers at ", granted, " bytes (net.core.rmem_max): point clouds ",
+              "will be lost; raise it, e.g. sudo sysctl -w net.core.rmem_max=", t.socket_buffer_bytes);
+}
+
 void subscribe(DdsParticipant& dds, live::LiveFeeder& feeder, const config::RigConfig& cfg, const Options& o) {
   using Encoded = live::LiveFeeder::Encoded;
   // Best effort readers: they match the drivers' sensor-data writers and reliable ones alike.
@@ -152,7 +163,10 @@ void subscribe(DdsParticipant& dds, live::LiveFeeder& feeder, const config::RigC
 
 int run(const Options& o, const sigset_t& stop_signals) {
   const config::RigConfig cfg = live::loadRigConfig(o.config, o.calib, "--config", "--calib");
-  auto dds = std::make_unique<DdsParticipant>(domainIdFromEnvironment(), o.name);
+  Transport transport;
+  transport.kind = transportKind(o.transport);
+  if (transport.kind != Transport::Kind::kFastDdsDefault) warnOnSmallReceiveBuffer(transport);
+  auto dds = std::make_unique<DdsParticipant>(domainIdFromEnvironment(), o.name, transport);
   DdsOutlet outlet(*dds, o.name);
   live::LiveFeeder feeder(cfg, o.feeder, outlet);
   SaveService service(*dds, o.name, feeder);
@@ -192,6 +206,12 @@ int main(int argc, char** argv) {
   app.add_option("--map-frame", f.map_frame, "Loop-corrected world frame (Path, map)")->capture_default_str();
   app.add_option("--odom-frame", f.odom_frame, "The odometry's world frame")->capture_default_str();
   app.add_option("--body-frame", f.body_frame, "The IMU (body) frame")->capture_default_str();
+  app.add_option("--transport", o.transport,
+                 "udp: UDP with 8 MB socket buffers (drivers on any host, on Fast DDS's defaults); shm: shared "
+                 "memory with 32 MB segments (drivers with the same profile, ros2/fastdds_large_data.xml); "
+                 "default: Fast DDS's own (loses clouds over 0.5 MB)")
+      ->check(CLI::IsMember({"udp", "shm", "default"}))
+      ->capture_default_str();
   app.add_flag("--no-tf", o.no_tf, "Do not publish map -> odom -> body on /tf");
   app.add_option("--map-period", f.map_publish_period_s, "Seconds between map publications (0: never)")
       ->capture_default_str();

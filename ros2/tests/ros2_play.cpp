@@ -1,8 +1,9 @@
 // Test tool: plays a ROS 1 bag into DDS as ROS 2 drivers would publish it: each message CDR-encoded
 // as its ROS 2 type (the Livox topics as `LIVOX_TYPE`), on its topic's ROS 2 name, with the
 // drivers' sensor-data QoS (best effort, keep last 5), at RATE times the bag's pace. Starts once
-// every topic has a reader (the node), waits 30 s at most for them.
-// Usage: ros2_play DOMAIN BAG RATE LIVOX_TYPE
+// every topic has a reader (the node), waits 30 s at most for them. TRANSPORT (dds_transport.hpp)
+// is Fast DDS's default unless given: a driver on rmw_fastrtps without a profile.
+// Usage: ros2_play DOMAIN BAG RATE LIVOX_TYPE [udp|shm|default]
 #include <chrono>
 #include <iostream>
 #include <map>
@@ -15,8 +16,8 @@
 
 int main(int argc, char** argv) {
   using namespace mmlio::ros2;
-  if (argc != 5) {
-    std::cerr << "usage: ros2_play DOMAIN BAG RATE LIVOX_TYPE\n";
+  if (argc != 5 && argc != 6) {
+    std::cerr << "usage: ros2_play DOMAIN BAG RATE LIVOX_TYPE [udp|shm|default]\n";
     return 2;
   }
   try {
@@ -24,7 +25,9 @@ int main(int argc, char** argv) {
     const double rate = std::stod(argv[3]);
     const auto records = mmlio::testing::ros2Records(argv[2], argv[4]);
     if (records.empty() || !(rate > 0)) throw std::runtime_error("nothing to play");
-    DdsParticipant player(domain, "ros2_play");
+    Transport transport;
+    transport.kind = transportKind(argc == 6 ? argv[5] : "default");
+    DdsParticipant player(domain, "ros2_play", transport);
     std::map<std::string, DdsParticipant::Writer*> writers;
     for (const auto& r : records)
       if (!writers.count(r.topic))

@@ -90,22 +90,24 @@ void BagWriter::writeVelodyneCloud(const std::string& topic, const std::string& 
   sensor_msgs::PointCloud2 msg;
   msg.header = header(frame_id, scan.start_ns, impl_->seq++);
   using PF = sensor_msgs::PointField;
+  // velodyne_pointcloud's XYZIRT, byte for byte: a PCL point (x y z and a pad float), intensity,
+  // ring and time, padded to 32 bytes. Tests then move the message sizes a real driver sends.
   msg.fields = {field("x", 0, PF::FLOAT32),          field("y", 4, PF::FLOAT32),    field("z", 8, PF::FLOAT32),
-                field("intensity", 12, PF::FLOAT32), field("ring", 16, PF::UINT16), field("time", 18, PF::FLOAT32)};
-  constexpr std::uint32_t kStep = 22;
+                field("intensity", 16, PF::FLOAT32), field("ring", 20, PF::UINT16), field("time", 24, PF::FLOAT32)};
+  constexpr std::uint32_t kStep = 32;
   msg.height = 1;
   msg.width = static_cast<std::uint32_t>(scan.points.size());
   msg.is_bigendian = false;
   msg.point_step = kStep;
   msg.row_step = kStep * msg.width;
   msg.is_dense = true;
-  msg.data.resize(static_cast<std::size_t>(msg.row_step));
+  msg.data.assign(static_cast<std::size_t>(msg.row_step), 0);
   std::uint8_t* out = msg.data.data();
   for (const Point& p : scan.points) {
     std::memcpy(out + 0, p.xyz.data(), 12);
-    std::memcpy(out + 12, &p.intensity, 4);
-    std::memcpy(out + 16, &p.ring, 2);
-    std::memcpy(out + 18, &p.time_s, 4);
+    std::memcpy(out + 16, &p.intensity, 4);
+    std::memcpy(out + 20, &p.ring, 2);
+    std::memcpy(out + 24, &p.time_s, 4);
     if (!std::isfinite(p.xyz.x()) || !std::isfinite(p.xyz.y()) || !std::isfinite(p.xyz.z())) msg.is_dense = false;
     out += kStep;
   }

@@ -29,7 +29,10 @@ OnlinePipeline::OnlinePipeline(const config::RigConfig& cfg, const std::string& 
     : aligner_(alignerConfig(cfg, mode)),
       odometry_(cfg.estimator, lidarSetups(cfg, mode)),
       on_sweep_(std::move(on_sweep)) {
-  for (const auto& s : lidarSetups(cfg, mode)) offset_s_[s.extrinsic.name] = s.extrinsic.time_offset_s;
+  for (const auto& s : lidarSetups(cfg, mode)) {
+    offset_s_[s.extrinsic.name] = s.extrinsic.time_offset_s;
+    streams_.expect(s.extrinsic.name);
+  }
 }
 
 void OnlinePipeline::addImu(const ImuSample& sample) {
@@ -102,11 +105,22 @@ void OnlinePipeline::addScan(LidarScan scan) {
   }
   scanJumpGuard(scan.sensor).accepted();
   last_scan_ns_[scan.sensor] = scan.start_ns;
+  streams_.add(scan.sensor, scan.start_ns);
   aligner_.add(scan);
   drain(false);
 }
 
 void OnlinePipeline::flush() { drain(true); }
+
+std::map<std::string, LidarStreamTally::Stream> OnlinePipeline::lidarStreams(Stamp stream_end_ns) const {
+  std::map<std::string, LidarStreamTally::Stream> out = streams_.streamsUntil(stream_end_ns - shift_ns_);
+  for (auto& [sensor, st] : out) {
+    st.first_ns = externalStamp(st.first_ns);
+    st.last_ns = externalStamp(st.last_ns);
+    for (LidarStreamTally::Gap& g : st.gaps) g.after_ns = externalStamp(g.after_ns);
+  }
+  return out;
+}
 
 void OnlinePipeline::drain(bool all) {
   lidar::AlignedSweep sweep;

@@ -26,18 +26,39 @@ Json evaluationJson(const eval::EvalResult& ev) {
 
 }  // namespace
 
+namespace {
+
+/// What went missing from the LiDARs' streams, one clause per LiDAR ("" when nothing did).
+std::string lidarStreamLosses(const RunReport::Input& in) {
+  std::string out;
+  for (const auto& [name, st] : in.lidar_streams) {
+    std::string clause;
+    if (st.received == 0)
+      clause = name + " sent no scan with a valid point (the run used the other sensors only)";
+    else if (st.missing > 0)
+      clause = std::to_string(st.missing) + " of " + std::to_string(st.expected()) + " " + name +
+               " scans missing (never arrived, or without a valid point)";
+    if (!clause.empty()) out += (out.empty() ? "" : "; ") + clause;
+  }
+  return out;
+}
+
+}  // namespace
+
 bool RunReport::inputDegraded() const {
   return input.imu_dropped.total() + input.scans_out_of_order + input.scans_stamp_jumps + input.skipped_messages +
                  input.queue_dropped_imu + input.queue_dropped_scans >
              0 ||
-         input.truncated || input.damaged_chunks > 0 || !input.time_base_jumps.empty();
+         input.truncated || input.damaged_chunks > 0 || !input.time_base_jumps.empty() ||
+         !lidarStreamLosses(input).empty();
 }
 
 std::string RunReport::inputStatus() const {
-  return inputDegraded() ? "degraded: input dropped or re-timed (see input.imu_dropped, input.scans_dropped, "
-                           "input.queue_dropped, input.skipped_messages, input.truncated, input.damaged_chunks, "
-                           "input.time_base_jumps)"
-                         : "complete";
+  if (!inputDegraded()) return "complete";
+  const std::string losses = lidarStreamLosses(input);
+  return "degraded: " + (losses.empty() ? std::string() : losses + " (input.lidar_streams); ") +
+         "input dropped or re-timed (see input.imu_dropped, input.scans_dropped, input.queue_dropped, "
+         "input.skipped_messages, input.truncated, input.damaged_chunks, input.time_base_jumps)";
 }
 
 Json toJson(const RunReport& r) {
@@ -73,6 +94,21 @@ Json toJson(const RunReport& r) {
   in["scans_dropped"] = {{"out_of_order", r.input.scans_out_of_order}, {"stamp_jumps", r.input.scans_stamp_jumps}};
   if (r.input.scans_out_of_order + r.input.scans_stamp_jumps > 0)
     in["scans_dropped"]["between_s"] = span(r.input.scans_dropped_from_ns, r.input.scans_dropped_to_ns);
+  Json streams = Json::object();
+  for (const auto& [name, st] : r.input.lidar_streams) {
+    Json gaps = Json::array();
+    for (const LidarStreamTally::Gap& g : st.gaps)
+      gaps.push_back({{"after_s", toSec(g.after_ns)}, {"missing", g.missing}});
+    Json& j = streams[name];
+    j = {{"received", st.received},
+         {"expected", st.expected()},
+         {"missing", st.missing},
+         {"period_s", st.period_s},
+         {"first_s", toSec(st.first_ns)},
+         {"last_s", toSec(st.last_ns)},
+         {"gaps", gaps}};
+  }
+  in["lidar_streams"] = streams;
   Json jumps = Json::array();
   for (const auto& j : r.input.time_base_jumps) jumps.push_back({{"at_s", j.at_s}, {"shift_s", j.shift_s}});
   in["time_base_jumps"] = jumps;

@@ -162,6 +162,53 @@ TEST(LiveReport, JudgesCoverageDegradationAndTrustAsARunDoes) {
   EXPECT_NE(bad.untrusted.find("sweeps degraded"), std::string::npos) << bad.untrusted;
 }
 
+TEST(LiveReport, ScansThatNeverArriveMakeTheRunDegradedAndNameTheLidar) {
+  const sim::Simulator sim = office(6.0);
+  config::RigConfig cfg = testing::simRigConfig(sim);
+  cfg.mapping.loop_enabled = false;
+  System clean(cfg, "hvi");
+  testing::replay(sim, clean);
+  clean.finish();
+  const RunReport ok = clean.report();
+  ASSERT_EQ(ok.input.lidar_streams.size(), 2u);
+  for (const auto& [name, st] : ok.input.lidar_streams) {
+    EXPECT_EQ(st.missing, 0u) << name;
+    EXPECT_GT(st.received, 50u) << name;
+  }
+  EXPECT_EQ(ok.inputStatus(), "complete");
+
+  // A transport that loses every fifth Velodyne sweep from 2 s on: the scans never reach the
+  // pipeline (renamed to a LiDAR it does not use).
+  const Stamp from = sim.startNs() + fromSec(2.0);
+  std::size_t lost = 0;
+  System lossy(cfg, "hvi");
+  int velodyne = 0;
+  testing::replay(sim, lossy, [&](int, LidarScan& scan) {
+    if (scan.sensor != "velodyne") return;
+    if (scan.start_ns >= from && velodyne++ % 5 == 0) {
+      scan.sensor = "lost";
+      ++lost;
+    }
+  });
+  lossy.finish();
+  const RunReport bad = lossy.report();
+  ASSERT_GT(lost, 5u);
+  EXPECT_EQ(bad.input.lidar_streams.at("velodyne").missing, lost);
+  EXPECT_EQ(bad.input.lidar_streams.at("livox").missing, 0u);
+  EXPECT_TRUE(bad.inputDegraded());
+  EXPECT_NE(bad.inputStatus().find(std::to_string(lost) + " of"), std::string::npos) << bad.inputStatus();
+  EXPECT_NE(bad.inputStatus().find("velodyne"), std::string::npos) << bad.inputStatus();
+
+  System blind(cfg, "hvi");  // the Velodyne sends nothing usable all run (only zeros, say)
+  testing::replay(sim, blind, [&](int, LidarScan& scan) {
+    if (scan.sensor == "velodyne") scan.sensor = "lost";
+  });
+  blind.finish();
+  const RunReport hi = blind.report();
+  EXPECT_EQ(hi.input.lidar_streams.at("velodyne").received, 0u);
+  EXPECT_NE(hi.inputStatus().find("velodyne sent no scan"), std::string::npos) << hi.inputStatus();
+}
+
 }  // namespace mmlio::pipeline
 
 namespace mmlio {

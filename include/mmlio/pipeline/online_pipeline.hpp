@@ -12,6 +12,7 @@
 #include "mmlio/estimator/odometry.hpp"
 #include "mmlio/lidar/sweep_aligner.hpp"
 #include "mmlio/pipeline/imu_gate.hpp"
+#include "mmlio/pipeline/lidar_stream_tally.hpp"
 #include "mmlio/pipeline/stamp_jump_guard.hpp"
 
 namespace mmlio::pipeline {
@@ -41,6 +42,8 @@ class OnlinePipeline {
   };
   const ScanDrops& scanDrops() const { return scan_drops_; }
   std::size_t sweepsProcessed() const { return processed_; }
+  /// Every LiDAR stream's scans received and missing as of the stream's end, in the stream's time.
+  std::map<std::string, LidarStreamTally::Stream> lidarStreams(Stamp stream_end_ns) const;
   /// Most sweeps that waited at once for the IMU to cover them (bounded: see kMaxImuWaitNs).
   std::size_t waitingHighWater() const { return waiting_high_water_; }
 
@@ -69,6 +72,7 @@ class OnlinePipeline {
   estimator::Odometry odometry_;
   ImuGate imu_gate_;
   ScanDrops scan_drops_;
+  LidarStreamTally streams_;  // in the estimator's stamps
   std::map<std::string, Stamp> last_scan_ns_;
   std::map<std::string, StampJumpGuard> scan_jumps_;  // per LiDAR
   bool timeBaseJumped(Stamp imu_jump_ns) const;
