@@ -44,8 +44,9 @@ void printCalibration(const pipeline::BagCalibrationResult& r) {
               ypr.z());
   std::printf("  %s\n", r.spatial.message.c_str());
   if (r.temporal.ok)
-    std::printf("  clock offset %.2f +- %.2f ms (t_imu = t_stamp + offset)\n", 1e3 * r.temporal.offset_s,
-                1e3 * r.temporal.sigma_s);
+    std::printf("  clock offset %.2f +- %.2f ms (t_imu = t_stamp + offset)%s%s\n", 1e3 * r.temporal.offset_s,
+                1e3 * r.temporal.sigma_s,
+                r.temporal.advice.empty() ? "" : "\n  uncertain: ", r.temporal.advice.c_str());
   else
     std::printf("  clock offset not estimated: %s\n",
                 r.temporal.message.empty() ? "disabled" : r.temporal.message.c_str());

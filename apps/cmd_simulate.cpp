@@ -27,6 +27,7 @@ struct SimulateArgs {
   double duration_s = 0.0;
   std::uint64_t seed = 1;
   double time_offset_s = 0.0;
+  double velodyne_phase_s = -1.0;
   std::string pattern = "lissajous";
   sim::ImuNoiseConfig imu;
   double acc_bias_m_s2 = -1;
@@ -85,6 +86,7 @@ void runSimulate(const SimulateArgs& args) {
   options.duration_s = args.duration_s;
   options.seed = args.seed;
   options.velodyne_time_offset_s = args.time_offset_s;
+  options.velodyne_phase_s = args.velodyne_phase_s;
   options.imu = args.imu;
   options.acc_bias_m_s2 = args.acc_bias_m_s2;
   options.random_mount = args.random_mount;
@@ -166,6 +168,9 @@ void registerSimulateCommand(CLI::App& app) {
   cmd->add_option("--seed", args->seed, "Noise seed (same seed, same bytes)");
   cmd->add_option("--time-offset", args->time_offset_s,
                   "Velodyne stamps are written as t_true - S (truth time_offset_s = S)");
+  cmd->add_option("--velodyne-phase", args->velodyne_phase_s,
+                  "Seconds (0 to 0.1) the Velodyne's sweeps start after the Livox's frames (default 0.037, or drawn "
+                  "with --random-mount)");
   cmd->add_option("--pattern", args->pattern,
                   "Solid-state scan pattern: lissajous (Horizon-like lines) or rosette (Mid-40 / Avia-like petals)")
       ->check(CLI::IsMember({"lissajous", "rosette"}));

@@ -167,6 +167,7 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
       offset_s = res.temporal.offset_s;
       log::emit(log::Level::kInfo, "clock offset of '", spinning->name, "': ", fmt(1e3 * offset_s, 4), " +- ",
                 fmt(1e3 * res.temporal.sigma_s, 2), " ms (", res.temporal.message, ")");
+      if (!res.temporal.advice.empty()) log::emit(log::Level::kWarn, res.temporal.advice);
     } else {
       log::emit(log::Level::kWarn, "clock offset not estimated (", res.temporal.message, "); keeping ",
                 spinning->time_offset_s, " s from the config");
@@ -186,6 +187,7 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
   if (res.temporal.ok) {
     res.extra[spinning->name]["time_offset_sigma_s"] = res.temporal.sigma_s;
     res.extra[spinning->name]["time_offset_increments"] = res.temporal.increments;
+    if (!res.temporal.advice.empty()) res.extra[spinning->name]["time_offset_advice"] = res.temporal.advice;
   }
   res.extra["generated_by"] = "mmlio calibrate " + bag_path;
 

@@ -29,6 +29,7 @@ Simulator::Simulator(SimOptions options) : options_(std::move(options)) {
   livox_.pattern = options_.livox_pattern;
   velodyne_beams_ = velodyneBeams(velodyne_);
   drawMount();
+  if (options_.velodyne_phase_s >= 0) velodyne_phase_ns_ = fromSec(std::min(options_.velodyne_phase_s, 0.0999));
 
   imu_noise_ = options_.imu;
   imu_noise_.initial_bias.acc_m_s2 = Eigen::Vector3d(0.02, -0.015, 0.02);

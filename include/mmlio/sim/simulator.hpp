@@ -56,6 +56,7 @@ struct SimOptions {
   bool livox_no_returns_as_zero = false;  // beams without a return become (0,0,0) points, as the Livox driver does
   int people = 0;                         // people walking through the scene (see people.hpp), paths from the seed
   bool handheld = false;                  // the route carried by hand (carriedByHand in scenarios.hpp)
+  double velodyne_phase_s = -1;           // 0..0.1: Velodyne sweeps start this long after Livox frames (< 0: 37 ms)
 };
 
 /// A scenario's full walk with every other option at its default.
