@@ -208,8 +208,8 @@ int main(int argc, char** argv) {
   app.add_option("--body-frame", f.body_frame, "The IMU (body) frame")->capture_default_str();
   app.add_option("--transport", o.transport,
                  "udp: UDP with 8 MB socket buffers (drivers on any host, on Fast DDS's defaults); shm: shared "
-                 "memory with 32 MB segments (drivers with the same profile, ros2/fastdds_large_data.xml); "
-                 "default: Fast DDS's own (loses clouds over 0.5 MB)")
+                 "memory with 32 MB segments, UDP as udp; default: Fast DDS's own (loses some 0.9 MB clouds); "
+                 "see ros2/README.md")
       ->check(CLI::IsMember({"udp", "shm", "default"}))
       ->capture_default_str();
   app.add_flag("--no-tf", o.no_tf, "Do not publish map -> odom -> body on /tf");

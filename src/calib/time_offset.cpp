@@ -123,10 +123,11 @@ std::vector<SensorRotation> sweepRotations(const std::vector<LidarScan>& sweeps,
         if (k + m >= sweeps.size() || points[k + m].empty() || !contiguous(k, m)) continue;
         Eigen::Isometry3d start = prior;
         if (m > 1) {
+          const auto from = step.begin() + static_cast<std::ptrdiff_t>(k);
+          if (!std::all_of(from, from + static_cast<std::ptrdiff_t>(m), [](const auto& t) { return t.has_value(); }))
+            continue;
           start.setIdentity();
-          for (std::size_t j = k; j < k + m && start.matrix().allFinite(); ++j)
-            start = step[j] ? start * *step[j] : Eigen::Isometry3d(Eigen::Matrix4d::Constant(NAN));
-          if (!start.matrix().allFinite()) continue;
+          for (auto t = from; t != from + static_cast<std::ptrdiff_t>(m); ++t) start = start * **t;
         }
         if (!target) target.emplace(map::voxelCentroids(points[k], icp.voxel_fine_m));
         const backend::IcpResult r = backend::alignPointToPlane(points[k + m], *target, start, icp);
@@ -177,6 +178,8 @@ struct CostSums {
     d.rt -= o.rt;
     return d;
   }
+  /// The residual bias that fits the increments best (rad/s).
+  Eigen::Vector3d bias() const { return tt > 0 ? Eigen::Vector3d(rt / tt) : Eigen::Vector3d::Zero(); }
   double cost() const { return tt > 0 ? rr - rt.squaredNorm() / tt : rr; }
 };
 
@@ -306,16 +309,13 @@ TimeOffsetResult estimateTimeOffset(const std::vector<SensorRotation>& rotations
   const Stamp shift = fromSec(first.offset_s);
   std::vector<Eigen::Vector3d> residual;
   std::vector<double> dts;
-  Eigen::Vector3d rt = Eigen::Vector3d::Zero();
-  double tt = 0;
+  CostSums sums;
   for (const SensorRotation& r : rotations) {
-    const double dt = toSec(r.t1_ns - r.t0_ns);
+    dts.push_back(toSec(r.t1_ns - r.t0_ns));
     residual.emplace_back(R_imu_sensor * r.rotvec - gyroRotation(imu, r.t0_ns + shift, r.t1_ns + shift, gyro_bias));
-    dts.push_back(dt);
-    rt += residual.back() * dt;
-    tt += dt * dt;
+    sums.add(residual.back(), dts.back());
   }
-  const Eigen::Vector3d bias = tt > 0 ? Eigen::Vector3d(rt / tt) : Eigen::Vector3d::Zero();
+  const Eigen::Vector3d bias = sums.bias();
   std::vector<double> norms;
   for (std::size_t i = 0; i < residual.size(); ++i) norms.push_back((residual[i] - bias * dts[i]).norm());
   std::vector<double> sorted = norms;

@@ -24,10 +24,6 @@ Json evaluationJson(const eval::EvalResult& ev) {
   return j;
 }
 
-}  // namespace
-
-namespace {
-
 /// What went missing from the LiDARs' streams, one clause per LiDAR ("" when nothing did).
 std::string lidarStreamLosses(const RunReport::Input& in) {
   std::string out;

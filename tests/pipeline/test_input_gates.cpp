@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <thread>
 
@@ -48,6 +49,18 @@ Trajectory runOffice(const sim::Simulator& sim, const std::function<void(int, Li
   testing::replay(sim, online, edit, edit_imu);
   if (time_base_jumps) *time_base_jumps = online.timeBaseJumps().size();
   return trajectory;
+}
+
+/// The simulated sequence through the System the live node uses (no loops), its scans and IMU
+/// samples edited as testing::replay does, finished: its report.
+pipeline::RunReport systemReport(const sim::Simulator& sim, const std::function<void(int, LidarScan&)>& edit,
+                                 const std::function<void(std::size_t, ImuSample&)>& edit_imu = {}) {
+  config::RigConfig cfg = testing::simRigConfig(sim);
+  cfg.mapping.loop_enabled = false;
+  pipeline::System system(cfg, "hvi");
+  testing::replay(sim, system, edit, edit_imu);
+  system.finish();
+  return system.report();
 }
 
 sim::Simulator office(double duration_s) {
@@ -152,24 +165,17 @@ TEST(LiveReport, JudgesCoverageDegradationAndTrustAsARunDoes) {
   strict.max_drift_sigma_m = 1e-6;
   EXPECT_NE(clean.report(0, strict).untrusted.find("drift"), std::string::npos);
 
-  System stopped(cfg, "hvi");  // the IMU stops 5 s into the 8 s
-  testing::replay(sim, stopped, {}, [&](std::size_t, ImuSample& s) {
+  // The IMU stops 5 s into the 8 s.
+  const RunReport bad = systemReport(sim, {}, [&](std::size_t, ImuSample& s) {
     if (s.stamp_ns >= imu_ends) s.acc_m_s2 = Eigen::Vector3d::Constant(std::nan(""));  // dropped by the IMU gate
   });
-  stopped.finish();
-  const RunReport bad = stopped.report();
   EXPECT_GT(bad.sweeps.degraded_fraction, 0.25);
   EXPECT_NE(bad.untrusted.find("sweeps degraded"), std::string::npos) << bad.untrusted;
 }
 
 TEST(LiveReport, ScansThatNeverArriveMakeTheRunDegradedAndNameTheLidar) {
   const sim::Simulator sim = office(6.0);
-  config::RigConfig cfg = testing::simRigConfig(sim);
-  cfg.mapping.loop_enabled = false;
-  System clean(cfg, "hvi");
-  testing::replay(sim, clean);
-  clean.finish();
-  const RunReport ok = clean.report();
+  const RunReport ok = systemReport(sim, {});
   ASSERT_EQ(ok.input.lidar_streams.size(), 2u);
   for (const auto& [name, st] : ok.input.lidar_streams) {
     EXPECT_EQ(st.missing, 0u) << name;
@@ -181,17 +187,14 @@ TEST(LiveReport, ScansThatNeverArriveMakeTheRunDegradedAndNameTheLidar) {
   // pipeline (renamed to a LiDAR it does not use).
   const Stamp from = sim.startNs() + fromSec(2.0);
   std::size_t lost = 0;
-  System lossy(cfg, "hvi");
   int velodyne = 0;
-  testing::replay(sim, lossy, [&](int, LidarScan& scan) {
+  const RunReport bad = systemReport(sim, [&](int, LidarScan& scan) {
     if (scan.sensor != "velodyne") return;
     if (scan.start_ns >= from && velodyne++ % 5 == 0) {
       scan.sensor = "lost";
       ++lost;
     }
   });
-  lossy.finish();
-  const RunReport bad = lossy.report();
   ASSERT_GT(lost, 5u);
   EXPECT_EQ(bad.input.lidar_streams.at("velodyne").missing, lost);
   EXPECT_EQ(bad.input.lidar_streams.at("livox").missing, 0u);
@@ -199,12 +202,10 @@ TEST(LiveReport, ScansThatNeverArriveMakeTheRunDegradedAndNameTheLidar) {
   EXPECT_NE(bad.inputStatus().find(std::to_string(lost) + " of"), std::string::npos) << bad.inputStatus();
   EXPECT_NE(bad.inputStatus().find("velodyne"), std::string::npos) << bad.inputStatus();
 
-  System blind(cfg, "hvi");  // the Velodyne sends nothing usable all run (only zeros, say)
-  testing::replay(sim, blind, [&](int, LidarScan& scan) {
+  // The Velodyne sends nothing usable all run (only zeros, say).
+  const RunReport hi = systemReport(sim, [&](int, LidarScan& scan) {
     if (scan.sensor == "velodyne") scan.sensor = "lost";
   });
-  blind.finish();
-  const RunReport hi = blind.report();
   EXPECT_EQ(hi.input.lidar_streams.at("velodyne").received, 0u);
   EXPECT_NE(hi.inputStatus().find("velodyne sent no scan"), std::string::npos) << hi.inputStatus();
 }
