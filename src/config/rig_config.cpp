@@ -30,6 +30,9 @@ void bind(YamlBinder& b, LidarConfig& c) {
   b.field("max_range_m", c.max_range_m, "drop returns farther than this, m");
   b.field("num_rings", c.num_rings, "laser rings (VLP-16: 16) or, for livox, scan lines (Horizon: 6)");
   b.field("enabled", c.enabled, "false: ignore this LiDAR in every mode");
+  b.field("refine_online", c.refine_online,
+          "spinning LiDAR: its extrinsic and clock offset are refined while running, against the solid-state "
+          "LiDAR's (see online_calibration)");
   if (b.reading() && !b.has("T_imu_sensor"))
     log::warn(
         b.location(), ": ", b.path("T_imu_sensor"), " not given: LiDAR '", c.name,
@@ -108,6 +111,19 @@ void bindOdometry(YamlBinder& b, estimator::OdometryConfig& c) {
   b.field("huber_loss_m", c.huber_loss_m, "Huber loss scale of point-to-edge / point-to-plane residuals, m");
 }
 
+void bind(YamlBinder& b, estimator::OnlineCalibrationConfig& c) {
+  b.field("enabled", c.enabled,
+          "refine each spinning LiDAR's extrinsic and clock offset while running (hvi with a solid-state LiDAR): "
+          "where the motion makes them observable, from how its points sit against the solid-state LiDAR's");
+  b.field("prior_sigma_time_s", c.prior_sigma_time_s, "how far the given clock offset may be off, s");
+  b.field("prior_sigma_rotation_deg", c.prior_sigma_rotation_deg,
+          "how far the given extrinsic's rotation may be off, deg");
+  b.field("prior_sigma_translation_m", c.prior_sigma_translation_m,
+          "how far the given extrinsic's translation may be off, m (0: kept as given; a ground robot observes "
+          "the LiDARs' height offset only in floors and ceilings, and its estimate there was found biased)");
+  b.field("memory_s", c.memory_s, "older sweeps' evidence fades with this time constant, s");
+}
+
 void bindLoop(YamlBinder& b, backend::MappingConfig& c) {
   b.field("enabled", c.loop_enabled, "detect and close loops in the back end");
   b.field("search_radius_m", c.loop.search_radius_m, "loop candidates: past keyframes within this distance, m");
@@ -153,6 +169,9 @@ void bind(YamlBinder& b, RigConfig& c) {
       "bad_frame", c.estimator.bad_frame, [](YamlBinder& s, lidar::BadFrameConfig& v) { bind(s, v); },
       "bad-frame check for solid-state LiDARs");
   b.section("odometry", c.estimator, bindOdometry, "sliding-window odometry");
+  b.section(
+      "online_calibration", c.estimator.online_calibration,
+      [](YamlBinder& s, estimator::OnlineCalibrationConfig& v) { bind(s, v); }, "calibration refined while running");
   b.section("loop", c.mapping, bindLoop, "loop closure");
   b.section("dynamic", c, bindDynamic, "moving objects (people): rejection in the odometry, ghost removal in the map");
   b.section("output", c, bindOutput, "outputs");
@@ -337,6 +356,11 @@ void validateRigConfig(const RigConfig& cfg) {
   check.nonNegative(e.keyframe_interval_s, "odometry.keyframe_interval_s");
   check.positive(e.max_iterations, "odometry.max_iterations");
   check.positive(e.huber_loss_m, "odometry.huber_loss_m");
+  const estimator::OnlineCalibrationConfig& oc = e.online_calibration;
+  check.positive(oc.prior_sigma_time_s, "online_calibration.prior_sigma_time_s");
+  check.positive(oc.prior_sigma_rotation_deg, "online_calibration.prior_sigma_rotation_deg");
+  check.nonNegative(oc.prior_sigma_translation_m, "online_calibration.prior_sigma_translation_m");
+  check.positive(oc.memory_s, "online_calibration.memory_s");
 
   const backend::LoopCloser::Config& loop = cfg.mapping.loop;
   check.positive(loop.search_radius_m, "loop.search_radius_m");

@@ -3,6 +3,7 @@
 #include <limits>
 
 #include "mmlio/core/log.hpp"
+#include "mmlio/core/so3.hpp"
 #include "odometry_impl.hpp"
 
 namespace mmlio::estimator {
@@ -19,7 +20,22 @@ Odometry::Impl::Impl(OdometryConfig c, std::vector<LidarSetup> l)
       plane_map(2.5 * cfg.map_voxel_m, 60, cfg.voxel_planes),
       window(windowConfig(cfg), g_world),
       free_space(cfg.dynamic),
-      mover_watch(cfg.dynamic) {}
+      mover_watch(cfg.dynamic),
+      calibration(onlineCalibration(cfg, lidars)) {}
+
+OnlineCalibration Odometry::Impl::onlineCalibration(const OdometryConfig& c, const std::vector<LidarSetup>& lidars) {
+  std::vector<LidarExtrinsic> given;
+  std::vector<char> refine;
+  int anchor = -1;
+  for (std::size_t i = 0; i < lidars.size(); ++i) {
+    const LidarExtrinsic& e = lidars[i].extrinsic;
+    given.push_back(e);
+    refine.push_back(e.kind == LidarKind::kSpinning && lidars[i].refine_online ? 1 : 0);
+    if (anchor < 0 && e.kind == LidarKind::kSolidState) anchor = static_cast<int>(i);
+  }
+  return OnlineCalibration(c.online_calibration, std::move(given), std::move(refine), anchor, c.map_voxel_m,
+                           c.lidar_sigma_m, c.huber_loss_m, c.local_map_radius_m);
+}
 
 SlidingWindowConfig Odometry::Impl::windowConfig(const OdometryConfig& c) {
   SlidingWindowConfig w;
@@ -88,6 +104,7 @@ bool Odometry::initialized() const { return impl_->initialized; }
 const imu::ImuInitResult& Odometry::imuInit() const { return impl_->init_result; }
 std::size_t Odometry::keyframes() const { return impl_->keyframes; }
 Stamp Odometry::lastImuNs() const { return impl_->imu.empty() ? 0 : impl_->imu.back().stamp_ns; }
+std::vector<LidarCalibrationEstimate> Odometry::calibration() const { return impl_->calibration.estimates(); }
 
 SweepResult Odometry::process(lidar::AlignedSweep sweep) {
   auto& d = *impl_;
@@ -96,6 +113,11 @@ SweepResult Odometry::process(lidar::AlignedSweep sweep) {
   if (!d.initialized && !d.initialise(sweep.start_ns)) return out;
 
   const Prediction p = d.predict(sweep, &out);
+  d.sweep_v_body = p.predicted.q_world_body.inverse() * p.predicted.v_world;
+  d.sweep_w_body = d.omega_body;
+  if (p.imu_ok && sweep.end_ns > p.prev.stamp_ns)
+    d.sweep_w_body =
+        so3::log(p.prev.q_world_body.inverse() * p.predicted.q_world_body) / toSec(sweep.end_ns - p.prev.stamp_ns);
   out.times_ms.emplace_back("imu_predict", watch.lapMs());
 
   // Movers are looked for where they were lately, and at intervals elsewhere (MoverWatch); a
@@ -112,6 +134,9 @@ SweepResult Odometry::process(lidar::AlignedSweep sweep) {
   NavState state = d.registration(features, p, sweep.end_ns, &tracked, &out);
   d.dropRejected(&features);
   out.times_ms.emplace_back("registration", watch.lapMs());
+  if (tracked && p.imu_ok && out.registered)
+    d.calibration.observe(d.calibration_features, state.pose(), d.sweep_v_body, d.sweep_w_body, sweep.end_ns);
+  out.times_ms.emplace_back("calibration", watch.lapMs());
 
   out.keyframe = d.addKeyframe(std::move(features), p, tracked, &state, &watch, &out);
   out.times_ms.emplace_back("map_update", watch.lapMs());

@@ -27,13 +27,21 @@ Features Odometry::Impl::extract(lidar::AlignedSweep& sweep, const lidar::SweepM
   std::vector<LidarFrameStats> stats(scans.size());
   std::vector<char> surface_points(scans.size(), 0);  // every return is matched as a plane point
   std::vector<SensorView> views(with_view ? scans.size() : 0);
+  // Each LiDAR's extrinsic with the online calibration's correction, and where its de-skewed points
+  // go: moved for its clock correction too.
+  std::vector<Eigen::Isometry3d> T_body_sensor(scans.size()), T_placed(scans.size());
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    const std::size_t lidar = indexOf(scans[i]->sensor);
+    T_body_sensor[i] = calibration.extrinsic(lidar);
+    T_placed[i] = calibration.clockShift(lidar, sweep_v_body, sweep_w_body) * T_body_sensor[i];
+  }
   tbb::parallel_for(std::size_t(0), scans.size(), [&](std::size_t i) {
     const LidarSetup& setup = *setupOf(scans[i]->sensor);
     deskewed[i] = std::move(*scans[i]);
-    lidar::deskewToEnd(deskewed[i], setup.extrinsic.T_imu_sensor, motion, end_s);
+    lidar::deskewToEnd(deskewed[i], T_body_sensor[i], motion, end_s);
     if (!views.empty()) {
       views[i].source = static_cast<std::uint8_t>(indexOf(setup.extrinsic.name));
-      views[i].T_body_sensor = setup.extrinsic.T_imu_sensor;
+      views[i].T_body_sensor = T_placed[i];
       views[i].image = map::RangeImage(deskewed[i].points, cfg.dynamic.image);
     }
     // Where every return is a surface point, scan-line plane features would go unused.
@@ -68,7 +76,7 @@ Features Odometry::Impl::extract(lidar::AlignedSweep& sweep, const lidar::SweepM
   if (cfg.keep_points) out->points_body.reserve(n_points);
   std::vector<char> dropped(scans.size(), 0);  // bad frames that leave the sweep before registration
   for (std::size_t i = 0; i < scans.size(); ++i) {
-    const Eigen::Isometry3f T = setupOf(deskewed[i].sensor)->extrinsic.T_imu_sensor.cast<float>();
+    const Eigen::Isometry3f T = T_placed[i].cast<float>();
     const auto source = static_cast<std::uint8_t>(indexOf(deskewed[i].sensor));
     auto toBody = [&T, source](const std::vector<Point>& pts, std::vector<Point>* dst) {
       for (Point p : pts) {
@@ -107,6 +115,25 @@ Features Odometry::Impl::extract(lidar::AlignedSweep& sweep, const lidar::SweepM
       src->push_back(p.source);
     }
   };
+  // The calibration's features: each LiDAR's own, evenly thinned (no other LiDAR shares their voxels).
+  calibration_features = Features{};
+  if (calibration.active())
+    for (std::size_t i = 0; i < scans.size(); ++i) {
+      const std::size_t lidar = indexOf(deskewed[i].sensor);
+      if (dropped[i] || (lidar != calibration.anchor() && !calibration.refines(lidar))) continue;
+      const Eigen::Isometry3d& T = T_placed[i];
+      const auto take = [&](const std::vector<Point>& pts, std::vector<Eigen::Vector3d>* dst,
+                            std::vector<std::uint8_t>* src) {
+        const std::size_t stride = std::max<std::size_t>(1, pts.size() / OnlineCalibration::kFeaturesPerLidar);
+        for (std::size_t k = 0; k < pts.size(); k += stride) {
+          dst->push_back(T * pts[k].xyz.cast<double>());
+          src->push_back(static_cast<std::uint8_t>(lidar));
+        }
+      };
+      take(clouds[i].edges, &calibration_features.edges, &calibration_features.edge_source);
+      take(surface_points[i] ? deskewed[i].points : clouds[i].planes, &calibration_features.planes,
+           &calibration_features.plane_source);
+    }
   toVec(lidar::voxelDownsample(edges, cfg.edge_voxel_m), &f.edges, &f.edge_source);
   toVec(lidar::voxelDownsample(planes, cfg.plane_voxel_m), &f.planes, &f.plane_source);
   for (std::size_t s = 0; s < lidars.size(); ++s) {

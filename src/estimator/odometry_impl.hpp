@@ -61,9 +61,15 @@ struct Odometry::Impl {
   std::shared_ptr<SweepView> view;                       // this sweep's, while it is processed
   bool in_imu_gap = false;                               // the last sweep had no usable IMU
   Eigen::Vector3d omega_body = Eigen::Vector3d::Zero();  // last sweep's turn rate, rad/s
+  OnlineCalibration calibration;
+  // This sweep's features for the calibration (each LiDAR thinned on its own) and the body motion
+  // its clock correction was made at.
+  Features calibration_features;
+  Eigen::Vector3d sweep_v_body = Eigen::Vector3d::Zero(), sweep_w_body = Eigen::Vector3d::Zero();
 
   Impl(OdometryConfig c, std::vector<LidarSetup> l);
   static SlidingWindowConfig windowConfig(const OdometryConfig& c);
+  static OnlineCalibration onlineCalibration(const OdometryConfig& c, const std::vector<LidarSetup>& lidars);
 
   // ---- odometry.cpp ----
   /// Once the IMU initialiser is ready: the first state. False while it is not (or failed).

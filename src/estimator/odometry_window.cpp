@@ -34,6 +34,7 @@ bool Odometry::Impl::addKeyframe(Features features, const Prediction& p, bool tr
   window.marginalizeOldest(edge_map, plane_map);
   out->times_ms.emplace_back("marginalize", watch->lapMs());
   addToMap(window.back());
+  calibration.addAnchorKeyframe(calibration_features, poseOf(window.back().x.pose));
   *state = fromBlocks(window.back().x, state->stamp_ns);
   if (view) view->place(state->pose());
   // What the keyframe sees through in the local map was left by a mover: where none was found

@@ -20,13 +20,6 @@ std::string fmt(double v, int precision = 3) {
   return os.str();
 }
 
-Json matrixRows(const Eigen::Isometry3d& T) {
-  Json rows = Json::array();
-  for (int r = 0; r < 4; ++r)
-    for (int c = 0; c < 4; ++c) rows.push_back(T.matrix()(r, c));
-  return rows;
-}
-
 struct Collected {
   std::vector<ImuSample> imu;
   std::vector<LidarScan> solid_frames, spinning_rest, spinning_all;

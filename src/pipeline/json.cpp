@@ -14,4 +14,11 @@ std::string plainText(const Json& value) {
   return value.dump();
 }
 
+Json matrixRows(const Eigen::Isometry3d& T) {
+  Json rows = Json::array();
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) rows.push_back(T.matrix()(r, c));
+  return rows;
+}
+
 }  // namespace mmlio::pipeline

@@ -8,6 +8,7 @@ std::vector<estimator::LidarSetup> lidarSetups(const config::RigConfig& cfg, con
     estimator::LidarSetup s;
     s.extrinsic = config::toExtrinsic(*lidar);
     s.num_rings = lidar->num_rings;
+    s.refine_online = lidar->refine_online;
     out.push_back(s);
   }
   return out;

@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "mmlio/core/log.hpp"
+#include "mmlio/core/so3.hpp"
 #include "mmlio/io/pcd_io.hpp"
 #include "mmlio/io/trajectory_writer.hpp"
 #include "mmlio/pipeline/odometry_setup.hpp"
@@ -38,6 +39,7 @@ void System::onSweep(estimator::SweepResult r) {
   else
     ++sweeps_.tracked;
   Stopwatch handoff;
+  sampleCalibration(r.state.stamp_ns);
   odometry_poses_.push_back({r.state.stamp_ns, r.state.pose()});
   degeneracy_.add(r);
   dynamic_.sweeps_judged += r.judged_for_movers;
@@ -80,6 +82,31 @@ void System::onSweep(estimator::SweepResult r) {
   if (timing_observer_) timing_observer_(stamp_ns, times);
   // r was moved to the back end only without an observer.
   if (observer_) observer_(r);  // NOLINT(bugprone-use-after-move)
+}
+
+void System::sampleCalibration(Stamp stamp_ns) {
+  constexpr Stamp kIntervalNs = 1000000000;
+  if (stamp_ns < next_calibration_sample_ns_) return;
+  next_calibration_sample_ns_ = stamp_ns + kIntervalNs;
+  const double t_s = first_imu_ns_ > 0 ? toSec(stamp_ns - first_imu_ns_) : 0.0;
+  for (const estimator::LidarCalibrationEstimate& e : odometry().calibration()) calibration_series_.push_back({t_s, e});
+}
+
+std::vector<RunReport::RefinedCalibration> System::refinedCalibration() const {
+  std::vector<RunReport::RefinedCalibration> out;
+  for (const estimator::LidarCalibrationEstimate& e : odometry().calibration()) {
+    RunReport::RefinedCalibration c;
+    for (const config::LidarConfig& l : cfg_.lidars)
+      if (l.name == e.sensor) c.given = config::toExtrinsic(l);
+    c.last = e;
+    c.T_imu_sensor = c.given.T_imu_sensor;
+    c.T_imu_sensor.linear() = so3::exp(e.rotation_rad).toRotationMatrix() * c.T_imu_sensor.linear();
+    c.T_imu_sensor.translation() += e.translation_m;
+    for (const RunReport::RefinedCalibration::Sample& s : calibration_series_)
+      if (s.estimate.sensor == e.sensor) c.series.push_back(s);
+    out.push_back(std::move(c));
+  }
+  return out;
 }
 
 void System::finish() {
@@ -154,6 +181,7 @@ RunReport System::report(Stamp stream_end_ns, const TrustLimits& limits) const {
     r.dynamic.map_points_removed = b.ghostRemoval().removed_points;
   });
   r.mapping_error = backend_error_;
+  r.online_calibration = refinedCalibration();
   r.memory.sweeps_waiting_for_imu_max = online_.waitingHighWater();
   r.memory.mapping_queue_max = mapping_.queueHighWater();
   r.memory.mapping_queue_capacity = mapping_.capacity();

@@ -29,6 +29,7 @@ struct LidarConfig {
   double max_range_m = 100.0;  // returns farther than this are dropped
   int num_rings = 16;          // laser rings (VLP-16: 16) or Livox scan lines (Horizon: 6)
   bool enabled = true;         // false: ignored in every mode
+  bool refine_online = true;   // spinning: extrinsic and clock refined while running (online_calibration)
 
   LidarKind kind() const;  // livox -> kSolidState, the others -> kSpinning
 };

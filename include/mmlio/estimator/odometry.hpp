@@ -18,6 +18,7 @@
 #include "mmlio/core/types.hpp"
 #include "mmlio/estimator/degeneracy.hpp"
 #include "mmlio/estimator/free_space.hpp"
+#include "mmlio/estimator/online_calibration.hpp"
 #include "mmlio/imu/imu_noise.hpp"
 #include "mmlio/imu/initializer.hpp"
 #include "mmlio/lidar/bad_frame.hpp"
@@ -46,30 +47,32 @@ struct OdometryConfig {
   int registration_max_edges = 0;
   int registration_max_planes = 0;
   SurfacePoints surface_points = SurfacePoints::kSolidState;
-  double map_voxel_m = 0.2;             // local map resolution
-  bool voxel_planes = true;             // planar local-map cells match by their plane, not a kNN fit
-  double local_map_radius_m = 60.0;     // local map kept around the current pose
-  int window_size = 4;                  // keyframes in the sliding window
-  double keyframe_rotation_deg = 30.0;  // new keyframe after this rotation ...
-  double keyframe_translation_m = 1.0;  // ... or this translation ...
-  double keyframe_interval_s = 2.0;     // ... or this time
-  int max_iterations = 10;              // solver iterations per optimisation
-  double huber_loss_m = 0.05;           // robust loss scale of point-to-edge/plane residuals
-  double lidar_sigma_m = 0.05;          // point-to-map residual standard deviation
-  int match_rounds = 2;                 // correspondence re-association rounds per sweep
-  double prior_sigma_v_m_s = 0.05;      // registration: how far the previous sweep's velocity may move
-  double prior_sigma_ba = 0.005;        // ... its accelerometer bias, m/s^2
-  double prior_sigma_bg = 0.0005;       // ... its gyroscope bias, rad/s
-  bool keep_points = true;              // return de-skewed points for the map
-  DegeneracyConfig degeneracy;          // when a sweep's LiDAR information is too weak in a direction
-  bool remap_degenerate = true;         // keep the IMU prediction along the directions found degenerate
-  DynamicConfig dynamic;                // returns on moving objects: rejected, and carved from the local map
+  double map_voxel_m = 0.2;                    // local map resolution
+  bool voxel_planes = true;                    // planar local-map cells match by their plane, not a kNN fit
+  double local_map_radius_m = 60.0;            // local map kept around the current pose
+  int window_size = 4;                         // keyframes in the sliding window
+  double keyframe_rotation_deg = 30.0;         // new keyframe after this rotation ...
+  double keyframe_translation_m = 1.0;         // ... or this translation ...
+  double keyframe_interval_s = 2.0;            // ... or this time
+  int max_iterations = 10;                     // solver iterations per optimisation
+  double huber_loss_m = 0.05;                  // robust loss scale of point-to-edge/plane residuals
+  double lidar_sigma_m = 0.05;                 // point-to-map residual standard deviation
+  int match_rounds = 2;                        // correspondence re-association rounds per sweep
+  double prior_sigma_v_m_s = 0.05;             // registration: how far the previous sweep's velocity may move
+  double prior_sigma_ba = 0.005;               // ... its accelerometer bias, m/s^2
+  double prior_sigma_bg = 0.0005;              // ... its gyroscope bias, rad/s
+  bool keep_points = true;                     // return de-skewed points for the map
+  DegeneracyConfig degeneracy;                 // when a sweep's LiDAR information is too weak in a direction
+  bool remap_degenerate = true;                // keep the IMU prediction along the directions found degenerate
+  DynamicConfig dynamic;                       // returns on moving objects: rejected, and carved from the local map
+  OnlineCalibrationConfig online_calibration;  // spinning LiDARs' extrinsic and clock refined while running
 };
 
 /// One LiDAR of the rig as the estimator sees it.
 struct LidarSetup {
   LidarExtrinsic extrinsic;  // name, kind, T_imu_sensor (time offset applied by the caller)
   int num_rings = 16;
+  bool refine_online = true;  // a spinning LiDAR's calibration is refined against the solid-state one's
 };
 
 struct LidarFrameStats {
@@ -123,6 +126,8 @@ class Odometry {
   const imu::ImuInitResult& imuInit() const;
   std::size_t keyframes() const;
   Stamp lastImuNs() const;
+  /// The online calibration's corrections of the refined LiDARs (empty when it is off).
+  std::vector<LidarCalibrationEstimate> calibration() const;
 
  private:
   struct Impl;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "mmlio/backend/loop_figures.hpp"
+#include "mmlio/estimator/online_calibration.hpp"
 #include "mmlio/eval/evaluation.hpp"
 #include "mmlio/imu/initializer.hpp"
 #include "mmlio/io/decode_stats.hpp"
@@ -63,6 +64,17 @@ struct RunReport {
     std::size_t mapping_queue_max = 0, mapping_queue_capacity = 0;  // sweeps queued for the back end
     double peak_rss_mb = 0.0;                                       // the process's resident memory, MB
   };
+  // A spinning LiDAR's calibration as refined while running (online_calibration).
+  struct RefinedCalibration {
+    LidarExtrinsic given;  // what the run started from
+    estimator::LidarCalibrationEstimate last;
+    Eigen::Isometry3d T_imu_sensor = Eigen::Isometry3d::Identity();  // given with the last correction
+    struct Sample {
+      double t_s = 0.0;  // seconds from the first IMU sample
+      estimator::LidarCalibrationEstimate estimate;
+    };
+    std::vector<Sample> series;  // about one a second
+  };
   struct Outputs {
     std::string trajectory, map, dynamic_map;
     std::size_t poses = 0, map_points = 0;
@@ -92,6 +104,7 @@ struct RunReport {
   std::string mapping_error;  // why the back end stopped, if it failed
   Dynamic dynamic;
   Memory memory;
+  std::vector<RefinedCalibration> online_calibration;  // empty when off
   Outputs outputs;
   std::optional<eval::EvalResult> evaluation;  // with ground truth
 

@@ -83,6 +83,8 @@ class System {
  private:
   void onSweep(estimator::SweepResult r);
   void judgeTrust(RunReport* report, Stamp stream_end_ns, const TrustLimits& limits) const;
+  void sampleCalibration(Stamp stamp_ns);
+  std::vector<RunReport::RefinedCalibration> refinedCalibration() const;
   /// Estimator stamps back in the input's time (they differ after a time-base jump).
   Trajectory inputTime(Trajectory trajectory) const;
 
@@ -100,6 +102,8 @@ class System {
   std::vector<RunReport::SweepSample> timeline_;
   PoseLog odometry_poses_;  // estimator stamps: the back end corrects them by its keyframes' stamps
   Stamp first_imu_ns_ = 0;
+  std::vector<RunReport::RefinedCalibration::Sample> calibration_series_;
+  Stamp next_calibration_sample_ns_ = 0;
   std::string backend_error_;
   bool finished_ = false;
   Stopwatch wall_;
