@@ -46,7 +46,7 @@ Features thinned(const Features& f, std::size_t lidars, std::size_t max_per_lida
 /// Inverse on the directions the matrix informs, zero on the others.
 Eigen::MatrixXd pseudoInverse(const Eigen::MatrixXd& m) {
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(m);
-  const Eigen::VectorXd ev = es.eigenvalues();
+  const Eigen::VectorXd& ev = es.eigenvalues();
   const double floor = kRelativeEigenFloor * std::max(ev.maxCoeff(), 0.0);
   Eigen::VectorXd inv = Eigen::VectorXd::Zero(ev.size());
   for (Eigen::Index i = 0; i < ev.size(); ++i)

@@ -85,12 +85,12 @@ OnlineCalibration drive(const Rig& truth, const LidarExtrinsic& given, const Onl
       if (p.norm() > 12.0 || p.norm() < 0.5) continue;
       const Eigen::Vector3d jitter(noise(rng), noise(rng), noise(rng));
       if (std::atan2(std::abs(p.y()), p.x()) < 40 * kDeg && i % 2 == 0) {
-        f.planes.push_back(p + jitter);
+        f.planes.emplace_back(p + jitter);
         f.plane_source.push_back(1);
       } else if (i % 2 == 1) {
         // What the spinning LiDAR measured: the point where the body was clock_error_s later.
         const Eigen::Vector3d moved = so3::exp(-w_body * truth.clock_error_s) * p - v_body * truth.clock_error_s;
-        f.planes.push_back(placed * (truth.T_imu_spinning.inverse() * moved) + jitter);
+        f.planes.emplace_back(placed * (truth.T_imu_spinning.inverse() * moved) + jitter);
         f.plane_source.push_back(0);
       }
     }
