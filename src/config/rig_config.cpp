@@ -119,9 +119,15 @@ void bind(YamlBinder& b, estimator::OnlineCalibrationConfig& c) {
   b.field("prior_sigma_rotation_deg", c.prior_sigma_rotation_deg,
           "how far the given extrinsic's rotation may be off, deg");
   b.field("prior_sigma_translation_m", c.prior_sigma_translation_m,
-          "how far the given extrinsic's translation may be off, m (0: kept as given; a ground robot observes "
-          "the LiDARs' height offset only in floors and ceilings, and its estimate there was found biased)");
+          "how far the given extrinsic's translation along the IMU's x and y may be off, m (0: kept as given)");
+  b.field("prior_sigma_translation_z_m", c.prior_sigma_translation_z_m,
+          "... and along its z, m (0: kept as given; floors and ceilings are all that observe it from a ground "
+          "robot, and its estimate there was found biased)");
   b.field("memory_s", c.memory_s, "older sweeps' evidence fades with this time constant, s");
+  b.field("rerun", c.rerun,
+          "mmlio run: when the run settles on a calibration off from the one it started from by 2 ms, 0.1 deg or "
+          "5 mm, run the bag again from it, at most 3 passes (what was mapped before the motion determined it "
+          "stays in the map otherwise)");
 }
 
 void bindLoop(YamlBinder& b, backend::MappingConfig& c) {
@@ -360,6 +366,7 @@ void validateRigConfig(const RigConfig& cfg) {
   check.positive(oc.prior_sigma_time_s, "online_calibration.prior_sigma_time_s");
   check.positive(oc.prior_sigma_rotation_deg, "online_calibration.prior_sigma_rotation_deg");
   check.nonNegative(oc.prior_sigma_translation_m, "online_calibration.prior_sigma_translation_m");
+  check.nonNegative(oc.prior_sigma_translation_z_m, "online_calibration.prior_sigma_translation_z_m");
   check.positive(oc.memory_s, "online_calibration.memory_s");
 
   const backend::LoopCloser::Config& loop = cfg.mapping.loop;

@@ -9,18 +9,21 @@
 namespace mmlio::estimator {
 namespace {
 
-constexpr int kPose = 6;                       // dp, dtheta (right perturbation, as the LiDAR factors)
-constexpr std::size_t kMinMatches = 50;        // per LiDAR in a sweep that informs the calibration
-constexpr double kMaxResidualM = 0.1;          // the registration's gate: farther matches are other surfaces
-constexpr double kMaxStepPriorSigmas = 3.0;    // a sweep moving the estimate further is an outlier
-constexpr double kRelativeEigenFloor = 1e-9;   // pose directions weaker than this carry nothing
-constexpr double kHeldSigma = 1e-6;            // the prior of a quantity kept as given
-constexpr int kMinAnchorKeyframes = 5;         // an anchor map smaller than this matches too little of a sweep
-constexpr double kIndependentMatches = 300.0;
+constexpr int kPose = 6;                      // dp, dtheta (right perturbation, as the LiDAR factors)
+constexpr std::size_t kMinMatches = 50;       // per LiDAR in a sweep that informs the calibration
+constexpr double kMaxResidualM = 0.1;         // the registration's gate: farther matches are other surfaces
+constexpr double kMaxStepPriorSigmas = 3.0;   // a sweep moving the estimate further is an outlier
+constexpr double kRelativeEigenFloor = 1e-9;  // pose directions weaker than this carry nothing
+constexpr double kHeldSigma = 1e-6;           // the prior of a quantity kept as given
+constexpr int kMinAnchorKeyframes = 5;        // an anchor map smaller than this matches too little of a sweep
+constexpr double kIndependentMatches = 100.0;
 // A correction is applied once its standard deviation is below these.
 constexpr double kDeterminedTimeS = 1e-3;
 constexpr double kDeterminedRotationRad = 0.05 * M_PI / 180.0;
 constexpr double kDeterminedTranslationM = 3e-3;
+// ... or below kRoughly times these when the estimate is more than 3 sigma from what is applied: a
+// given calibration that is clearly off is corrected before the motion has pinned the correction down.
+constexpr double kRoughly = 3.0;
 constexpr double kKeptAfterMove = 0.1;  // of the evidence gathered before the correction moved
 
 /// Every k-th feature of each LiDAR so that none has more than max_per_lidar.
@@ -54,6 +57,11 @@ Eigen::MatrixXd pseudoInverse(const Eigen::MatrixXd& m) {
   return es.eigenvectors() * inv.asDiagonal() * es.eigenvectors().transpose();
 }
 
+/// The standard deviation below which correction component i (rotation 3, translation 3, clock) is determined.
+double determinedBelow(Eigen::Index i) {
+  return i < 3 ? kDeterminedRotationRad : i < 6 ? kDeterminedTranslationM : kDeterminedTimeS;
+}
+
 }  // namespace
 
 OnlineCalibration::OnlineCalibration(OnlineCalibrationConfig cfg, std::vector<LidarExtrinsic> lidars,
@@ -74,9 +82,10 @@ OnlineCalibration::OnlineCalibration(OnlineCalibrationConfig cfg, std::vector<Li
     if (refine_[i]) refined_.push_back({i, 0});
   active_ = cfg_.enabled && anchor_ >= 0 && !refined_.empty();
   const double rot = cfg_.prior_sigma_rotation_deg * M_PI / 180.0;
-  const double trans = cfg_.prior_sigma_translation_m > 0 ? cfg_.prior_sigma_translation_m : kHeldSigma;
+  const auto held = [](double s) { return s > 0 ? s : kHeldSigma; };
+  const double across = held(cfg_.prior_sigma_translation_m), up = held(cfg_.prior_sigma_translation_z_m);
   Vec sigma;
-  sigma << rot, rot, rot, trans, trans, trans, cfg_.prior_sigma_time_s;
+  sigma << rot, rot, rot, across, across, up, cfg_.prior_sigma_time_s;
   prior_info_ = sigma.cwiseInverse().cwiseAbs2().asDiagonal();
   const auto n = static_cast<Eigen::Index>(kParams * refined_.size());
   x_ = estimate_ = info_x_ = Eigen::VectorXd::Zero(n);
@@ -123,8 +132,8 @@ void OnlineCalibration::addAnchorKeyframe(const Features& f, const Eigen::Isomet
   ++anchor_keyframes_;
 }
 
-bool OnlineCalibration::observe(const Features& f, const Eigen::Isometry3d& T_world_body,
-                                const Eigen::Vector3d& v_body, const Eigen::Vector3d& w_body, Stamp stamp_ns) {
+bool OnlineCalibration::observe(const Features& f, const Eigen::Isometry3d& T_world_body, const Eigen::Vector3d& v_body,
+                                const Eigen::Vector3d& w_body, Stamp stamp_ns) {
   if (!active_ || anchor_keyframes_ < kMinAnchorKeyframes) return false;
   MapMatchConfig matching;
   matching.max_residual_m = kMaxResidualM;
@@ -221,20 +230,24 @@ bool OnlineCalibration::observe(const Features& f, const Eigen::Isometry3d& T_wo
 
 Eigen::MatrixXd OnlineCalibration::priorInfo() const {
   Eigen::MatrixXd prior = Eigen::MatrixXd::Zero(x_.size(), x_.size());
-  for (std::size_t j = 0; j < refined_.size(); ++j) prior.block<kParams, kParams>(kParams * j, kParams * j) = prior_info_;
+  for (std::size_t j = 0; j < refined_.size(); ++j)
+    prior.block<kParams, kParams>(kParams * j, kParams * j) = prior_info_;
   return prior;
 }
 
-// A correction is applied once the motion has determined it: before, a clock error and a shift
-// along the way the rig moves look alike, and a guess between them would go into the map.
+// A correction is applied once the motion has determined it (or shown the given value clearly
+// wrong): before, a clock error and a shift along the way the rig moves look alike, and a guess
+// between them would go into the map.
 void OnlineCalibration::applyDetermined() {
-  const Eigen::VectorXd sigma = info_.ldlt().solve(Eigen::MatrixXd::Identity(x_.size(), x_.size())).diagonal().cwiseSqrt();
+  const Eigen::VectorXd sigma =
+      info_.ldlt().solve(Eigen::MatrixXd::Identity(x_.size(), x_.size())).diagonal().cwiseSqrt();
   const Eigen::VectorXd before = x_;
   for (std::size_t j = 0; j < refined_.size(); ++j) {
     const auto k = static_cast<Eigen::Index>(kParams * j);
     for (Eigen::Index i = 0; i < kParams; ++i) {
-      const double threshold = i < 3 ? kDeterminedRotationRad : i < 6 ? kDeterminedTranslationM : kDeterminedTimeS;
-      if (sigma[k + i] <= threshold) x_[k + i] = estimate_[k + i];
+      const double threshold = determinedBelow(i);
+      const double s = sigma[k + i], change = std::abs(estimate_[k + i] - x_[k + i]);
+      if (s <= threshold || (s <= kRoughly * threshold && change > 3.0 * s)) x_[k + i] = estimate_[k + i];
     }
   }
   // Sweeps whose points sat far from where the correction now puts them measured it through the
@@ -250,7 +263,8 @@ void OnlineCalibration::applyDetermined() {
 std::vector<LidarCalibrationEstimate> OnlineCalibration::estimates() const {
   std::vector<LidarCalibrationEstimate> out;
   if (!active_) return out;
-  const Eigen::VectorXd sigma = info_.ldlt().solve(Eigen::MatrixXd::Identity(x_.size(), x_.size())).diagonal().cwiseSqrt();
+  const Eigen::VectorXd sigma =
+      info_.ldlt().solve(Eigen::MatrixXd::Identity(x_.size(), x_.size())).diagonal().cwiseSqrt();
   for (std::size_t j = 0; j < refined_.size(); ++j) {
     const auto k = static_cast<Eigen::Index>(kParams * j);
     LidarCalibrationEstimate e;
@@ -261,6 +275,12 @@ std::vector<LidarCalibrationEstimate> OnlineCalibration::estimates() const {
     e.estimate_rotation_rad = estimate_.segment<3>(k);
     e.estimate_translation_m = estimate_.segment<3>(k + 3);
     e.estimate_time_offset_s = estimate_[k + 6];
+    Vec settled;
+    for (Eigen::Index i = 0; i < kParams; ++i)
+      settled[i] = sigma[k + i] <= kRoughly * determinedBelow(i) ? estimate_[k + i] : x_[k + i];
+    e.settled_rotation_rad = settled.head<3>();
+    e.settled_translation_m = settled.segment<3>(3);
+    e.settled_time_offset_s = settled[6];
     e.rotation_sigma_rad = sigma.segment<3>(k);
     e.translation_sigma_m = sigma.segment<3>(k + 3);
     e.time_offset_sigma_s = sigma[k + 6];

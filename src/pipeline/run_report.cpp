@@ -9,6 +9,31 @@ namespace {
 
 Json vec3(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); }
 
+Json refinedCalibrationJson(const std::vector<RunReport::RefinedCalibration>& calibrations) {
+  Json refined = Json::object();
+  for (const RunReport::RefinedCalibration& c : calibrations) {
+    const estimator::LidarCalibrationEstimate& e = c.last;
+    Json series = Json::array();
+    for (const auto& s : c.series)
+      series.push_back({{"t_s", s.t_s},
+                        {"time_offset_correction_ms", 1e3 * s.estimate.time_offset_s},
+                        {"time_offset_sigma_ms", 1e3 * s.estimate.time_offset_sigma_s},
+                        {"rotation_correction_deg", s.estimate.rotation_rad.norm() * 180.0 / M_PI},
+                        {"translation_correction_mm", 1e3 * s.estimate.translation_m.norm()}});
+    refined[c.given.name] = {{"sweeps", e.sweeps},
+                             {"time_offset_s", c.given.time_offset_s + e.settled_time_offset_s},
+                             {"time_offset_correction_ms", 1e3 * e.time_offset_s},
+                             {"time_offset_sigma_ms", 1e3 * e.time_offset_sigma_s},
+                             {"rotation_correction_deg", vec3(e.rotation_rad * 180.0 / M_PI)},
+                             {"rotation_sigma_deg", vec3(e.rotation_sigma_rad * 180.0 / M_PI)},
+                             {"translation_correction_mm", vec3(1e3 * e.translation_m)},
+                             {"translation_sigma_mm", vec3(1e3 * e.translation_sigma_m)},
+                             {"T_imu_sensor", matrixRows(c.T_imu_sensor)},
+                             {"series", series}};
+  }
+  return refined;
+}
+
 Json evaluationJson(const eval::EvalResult& ev) {
   Json j = Json::object();
   j["ate_rmse_m"] = ev.ate_rmse_m;
@@ -133,28 +158,9 @@ Json toJson(const RunReport& r) {
                    {"degraded_fraction", r.sweeps.degraded_fraction},
                    {"coverage", r.sweeps.coverage}};
   rep["degeneracy"] = r.degeneracy;
-  Json refined = Json::object();
-  for (const RunReport::RefinedCalibration& c : r.online_calibration) {
-    const estimator::LidarCalibrationEstimate& e = c.last;
-    Json series = Json::array();
-    for (const auto& s : c.series)
-      series.push_back({{"t_s", s.t_s},
-                        {"time_offset_correction_ms", 1e3 * s.estimate.time_offset_s},
-                        {"time_offset_sigma_ms", 1e3 * s.estimate.time_offset_sigma_s},
-                        {"rotation_correction_deg", s.estimate.rotation_rad.norm() * 180.0 / M_PI},
-                        {"translation_correction_mm", 1e3 * s.estimate.translation_m.norm()}});
-    refined[c.given.name] = {{"sweeps", e.sweeps},
-                             {"time_offset_s", c.given.time_offset_s + e.time_offset_s},
-                             {"time_offset_correction_ms", 1e3 * e.time_offset_s},
-                             {"time_offset_sigma_ms", 1e3 * e.time_offset_sigma_s},
-                             {"rotation_correction_deg", vec3(e.rotation_rad * 180.0 / M_PI)},
-                             {"rotation_sigma_deg", vec3(e.rotation_sigma_rad * 180.0 / M_PI)},
-                             {"translation_correction_mm", vec3(1e3 * e.translation_m)},
-                             {"translation_sigma_mm", vec3(1e3 * e.translation_sigma_m)},
-                             {"T_imu_sensor", matrixRows(c.T_imu_sensor)},
-                             {"series", series}};
-  }
-  rep["online_calibration"] = refined;
+  rep["online_calibration"] = refinedCalibrationJson(r.online_calibration);
+  if (!r.online_calibration_first_pass.empty())
+    rep["online_calibration_first_pass"] = refinedCalibrationJson(r.online_calibration_first_pass);
 
   Json features = Json::object();
   for (const auto& [name, t] : r.features) {

@@ -1,5 +1,6 @@
 #include "mmlio/pipeline/runner.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <limits>
 #include <filesystem>
@@ -7,9 +8,11 @@
 #include <memory>
 #include <sstream>
 
+#include "mmlio/config/calib_file.hpp"
 #include "mmlio/config/source_options.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
+#include "mmlio/core/so3.hpp"
 #include "mmlio/core/timer.hpp"
 #include "mmlio/estimator/odometry.hpp"
 #include "mmlio/io/bag_source.hpp"
@@ -66,9 +69,7 @@ class CreatedFolder {
   std::filesystem::path leaf_, outermost_;
 };
 
-}  // namespace
-
-RunResult runBag(const RunOptions& options) {
+RunResult runPass(const RunOptions& options) {
   const config::RigConfig& cfg = options.config;
   CreatedFolder out_folder(options.out_dir,
                            options.out_dir.empty() ? std::filesystem::path() : checkWritable(options.out_dir));
@@ -173,6 +174,10 @@ RunResult runBag(const RunOptions& options) {
   if (!result.complete) result.untrusted = "the bag ended early: " + result.error;
   if (result.interrupted) result.untrusted = "interrupted";
   report.untrusted = result.untrusted;
+  report.online_calibration_first_pass = options.first_pass_calibration;
+  if (options.pass > 1)
+    report.run.calibration += " (pass " + std::to_string(options.pass) + ": refined by the passes before)";
+  if (result.interrupted && !options.write_if_interrupted) return result;
   if (!options.out_dir.empty()) report = system.writeOutputs(options.out_dir, std::move(report), options.gt_path);
   out_folder.keep();
   result.trajectory = system.trajectory();
@@ -180,6 +185,93 @@ RunResult runBag(const RunOptions& options) {
   result.timing = report.timing;
   result.backend_timing = report.timing_backend;
   result.report = std::move(report);
+  return result;
+}
+
+// A refined calibration worth a second pass: off from the given one by more than these.
+constexpr double kRerunClockS = 0.002;
+constexpr double kRerunRotationRad = 0.1 * M_PI / 180.0;
+constexpr double kRerunTranslationM = 0.005;
+constexpr int kMaxPasses = 3;
+
+/// The calibration a next run should start from: the given one with what the run settled on.
+config::RigConfig withRefinedCalibration(config::RigConfig cfg,
+                                         const std::vector<RunReport::RefinedCalibration>& refined) {
+  for (const RunReport::RefinedCalibration& c : refined)
+    for (config::LidarConfig& l : cfg.lidars)
+      if (l.name == c.given.name) {
+        const estimator::LidarCalibrationEstimate& e = c.last;
+        l.T_imu_sensor = c.given.T_imu_sensor;
+        l.T_imu_sensor.linear() = so3::exp(e.settled_rotation_rad).toRotationMatrix() * l.T_imu_sensor.linear();
+        l.T_imu_sensor.translation() += e.settled_translation_m;
+        l.time_offset_s = c.given.time_offset_s + e.settled_time_offset_s;
+      }
+  return cfg;
+}
+
+/// What the run settled on that differs enough from the given calibration to run the bag again ("" if nothing).
+std::string significantChange(const std::vector<RunReport::RefinedCalibration>& refined) {
+  std::ostringstream what;
+  for (const RunReport::RefinedCalibration& c : refined) {
+    const estimator::LidarCalibrationEstimate& e = c.last;
+    if (std::abs(e.settled_time_offset_s) < kRerunClockS && e.settled_rotation_rad.norm() < kRerunRotationRad &&
+        e.settled_translation_m.norm() < kRerunTranslationM)
+      continue;
+    what.precision(3);
+    what << (what.tellp() > 0 ? "; " : "") << c.given.name << ": clock offset " << 1e3 * e.settled_time_offset_s
+         << " ms, rotation " << e.settled_rotation_rad.norm() * 180.0 / M_PI << " deg, translation "
+         << 1e3 * e.settled_translation_m.norm() << " mm";
+  }
+  return what.str();
+}
+
+/// The calibration the run ended with, every LiDAR of the rig, as `mmlio calibrate` writes it.
+void writeRefinedCalibration(const std::string& path, const config::RigConfig& cfg,
+                             const std::vector<RunReport::RefinedCalibration>& refined) {
+  const config::RigConfig final_cfg = withRefinedCalibration(cfg, refined);
+  config::Calibration calibration;
+  YAML::Node extra;
+  for (const config::LidarConfig& l : final_cfg.lidars) calibration[l.name] = {l.T_imu_sensor, l.time_offset_s};
+  for (const RunReport::RefinedCalibration& c : refined) {
+    extra[c.given.name]["refined_online"] = true;
+    extra[c.given.name]["time_offset_sigma_s"] = c.last.time_offset_sigma_s;
+    extra[c.given.name]["rotation_sigma_deg"] = c.last.rotation_sigma_rad.norm() * 180.0 / M_PI;
+  }
+  extra["generated_by"] = "mmlio run (online_calibration)";
+  config::writeCalibration(path, calibration, extra);
+}
+
+}  // namespace
+
+RunResult runBag(const RunOptions& options) {
+  RunResult result = runPass(options);
+  RunOptions pass = options;
+  config::RigConfig result_config = options.config;  // the calibration `result` started from
+  // Each pass starts from the calibration the one before settled on, until it settles on the one it
+  // started from. Not for replays (a soak test) or a run that did not end normally.
+  for (int passes = 1; passes < kMaxPasses && options.config.estimator.online_calibration.rerun &&
+                       options.replays <= 1 && result.complete && !result.interrupted;
+       ++passes) {
+    const std::vector<RunReport::RefinedCalibration>& refined = result.report.online_calibration;
+    const std::string change = significantChange(refined);
+    if (change.empty()) break;
+    log::info("online calibration settled on ", change, ": running the bag again from it (online_calibration.rerun)");
+    if (pass.first_pass_calibration.empty()) pass.first_pass_calibration = refined;
+    pass.config = withRefinedCalibration(pass.config, refined);
+    pass.pass = passes + 1;
+    pass.write_if_interrupted = false;  // an interrupted pass leaves the outputs of the one before
+    RunResult next = runPass(pass);
+    if (next.interrupted) {
+      log::warn("interrupted in pass ", passes + 1, ": the outputs of pass ", passes, " stand");
+      result.interrupted = true;
+      break;
+    }
+    result = std::move(next);
+    result_config = pass.config;
+  }
+  if (!options.out_dir.empty() && !result.report.online_calibration.empty())
+    writeRefinedCalibration(options.out_dir + "/calibration_refined.yaml", result_config,
+                            result.report.online_calibration);
   return result;
 }
 

@@ -100,8 +100,8 @@ std::vector<RunReport::RefinedCalibration> System::refinedCalibration() const {
       if (l.name == e.sensor) c.given = config::toExtrinsic(l);
     c.last = e;
     c.T_imu_sensor = c.given.T_imu_sensor;
-    c.T_imu_sensor.linear() = so3::exp(e.rotation_rad).toRotationMatrix() * c.T_imu_sensor.linear();
-    c.T_imu_sensor.translation() += e.translation_m;
+    c.T_imu_sensor.linear() = so3::exp(e.settled_rotation_rad).toRotationMatrix() * c.T_imu_sensor.linear();
+    c.T_imu_sensor.translation() += e.settled_translation_m;
     for (const RunReport::RefinedCalibration::Sample& s : calibration_series_)
       if (s.estimate.sensor == e.sensor) c.series.push_back(s);
     out.push_back(std::move(c));

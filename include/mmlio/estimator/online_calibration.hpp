@@ -27,10 +27,14 @@ namespace mmlio::estimator {
 
 struct OnlineCalibrationConfig {
   bool enabled = true;
-  double prior_sigma_time_s = 0.05;         // how far the given clock offset may be off
-  double prior_sigma_rotation_deg = 2.0;    // ... the given extrinsic's rotation
-  double prior_sigma_translation_m = 0.0;   // ... and translation (0: kept as given)
-  double memory_s = 60.0;                   // older sweeps' information fades with this time constant
+  double prior_sigma_time_s = 0.05;          // how far the given clock offset may be off
+  double prior_sigma_rotation_deg = 2.0;     // ... the given extrinsic's rotation
+  double prior_sigma_translation_m = 0.05;   // ... its translation along the IMU's x and y (0: kept as given)
+  double prior_sigma_translation_z_m = 0.0;  // ... and along z (0: kept as given)
+  double memory_s = 60.0;                    // older sweeps' information fades with this time constant
+  // Offline (mmlio run): when the run ends with a calibration that differs from the given one (2 ms,
+  // 0.1 deg, 5 mm), the bag is run again from it. Read by the runner, not the odometry.
+  bool rerun = true;
 };
 
 /// One refined LiDAR's correction of its given calibration, and its standard deviations.
@@ -45,6 +49,10 @@ struct LidarCalibrationEstimate {
   Eigen::Vector3d estimate_rotation_rad = Eigen::Vector3d::Zero();
   Eigen::Vector3d estimate_translation_m = Eigen::Vector3d::Zero();
   double estimate_time_offset_s = 0.0;
+  // What a next run should start from: the estimate where it is roughly determined, else what was applied.
+  Eigen::Vector3d settled_rotation_rad = Eigen::Vector3d::Zero();
+  Eigen::Vector3d settled_translation_m = Eigen::Vector3d::Zero();
+  double settled_time_offset_s = 0.0;
   Eigen::Vector3d rotation_sigma_rad = Eigen::Vector3d::Zero();
   Eigen::Vector3d translation_sigma_m = Eigen::Vector3d::Zero();
   double time_offset_sigma_s = 0.0;

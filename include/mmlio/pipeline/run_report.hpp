@@ -68,7 +68,7 @@ struct RunReport {
   struct RefinedCalibration {
     LidarExtrinsic given;  // what the run started from
     estimator::LidarCalibrationEstimate last;
-    Eigen::Isometry3d T_imu_sensor = Eigen::Isometry3d::Identity();  // given with the last correction
+    Eigen::Isometry3d T_imu_sensor = Eigen::Isometry3d::Identity();  // given with the correction settled on
     struct Sample {
       double t_s = 0.0;  // seconds from the first IMU sample
       estimator::LidarCalibrationEstimate estimate;
@@ -104,7 +104,8 @@ struct RunReport {
   std::string mapping_error;  // why the back end stopped, if it failed
   Dynamic dynamic;
   Memory memory;
-  std::vector<RefinedCalibration> online_calibration;  // empty when off
+  std::vector<RefinedCalibration> online_calibration;             // empty when off
+  std::vector<RefinedCalibration> online_calibration_first_pass;  // when the bag was run again with it
   Outputs outputs;
   std::optional<eval::EvalResult> evaluation;  // with ground truth
 

@@ -28,6 +28,11 @@ struct RunOptions {
   const std::atomic<bool>* stop = nullptr;  // set (e.g. by a signal handler): stop reading, write
                                             // what was computed, status "interrupted"
   TrustLimits trust;                        // beyond them RunResult::untrusted says why
+  // A second pass with the calibration a first one refined (online_calibration.rerun): what the
+  // first pass found (the report keeps it), and the outputs are left alone if it is interrupted.
+  std::vector<RunReport::RefinedCalibration> first_pass_calibration;
+  int pass = 1;
+  bool write_if_interrupted = true;
   /// Every tracked sweep's stamp, stage times and pass of the bag (0 unless replayed), on the
   /// reading thread (bench records its time-and-memory curve).
   std::function<void(Stamp sweep_end_ns, const StageTimes& times_ms, int replay)> on_sweep;
