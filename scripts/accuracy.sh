@@ -5,7 +5,8 @@
 # run's JSON line in OUT/results.jsonl.
 # Usage: scripts/accuracy.sh [OUT]   (default accuracy_out)
 #   SCENES="office corridor corridor_blind hall stairs ramp lab office+handheld corridor+handheld" SEEDS="1 2 3"
-#   NOISE="1 3 5" MODES="hvi vi hi" PEOPLE="0"   (SCENE+handheld: the scene's route carried by hand)
+#   NOISE="1 3 5" MODES="hvi vi hi" PEOPLE="0"   (SCENE+handheld: the scene's route carried by hand;
+#   MODES="hvi hvi+user": also the user's run, `mmlio calibrate` first, with its own table)
 #   (PEOPLE="0 4": every cell also with 4 people walking; the table then has a row per people count)
 #   JOBS=2 (parallel cells; each run also uses TBB threads)
 #   scripts/accuracy.sh --list prints the job commands instead (one per line, for a cluster scheduler),
@@ -29,7 +30,7 @@ summarise() {
   python3 - "$1/results.jsonl" <<'PY'
 import json, statistics, sys
 rows = [json.loads(l) for l in open(sys.argv[1]) if l.strip()]
-order = {"hvi": 0, "vi": 1, "hi": 2, "hvi+loop": 3}
+order = {"hvi": 0, "vi": 1, "hi": 2, "hvi+loop": 3, "hvi+user": 4, "hvi+loop+user": 5}
 def fmt(v, scale=100, unit="cm", digits=2):
     return "n/a" if v is None else f"{v * scale:.{digits}f}{(' ' + unit) if unit else ''}"
 for r in rows:
@@ -91,6 +92,30 @@ if kept:
         print(f'| {r["scene"]} s{r["seed"]} n{r["noise"]} | {r["run"]} | '
               f'{"n/a" if points is None else f"{100 * points:.1f} %"} | '
               f'{"n/a" if removed is None else f"{100 * removed / empty:.1f} %"} |')
+# The user's runs (MODES with +user): `mmlio calibrate`'s errors, what the run refined them to, and
+# the ATE against the same cell run with the true calibration.
+users = [r for r in rows if r["run"].endswith("+user") and "ate_rmse_m" in r]
+if users:
+    def med_worst(vals, digits=1):
+        vals = [abs(v) for v in vals if v is not None]
+        return f"{statistics.median(vals):.{digits}f} / {max(vals):.{digits}f}" if vals else "n/a"
+    print()
+    print("| scene | run | runs | clock error ms, calibrate / run (median / worst) | extrinsic mm, calibrate / run | "
+          "extrinsic deg, calibrate / run | ATE / ATE with the truth (median / worst) |")
+    print("|---|---|---|---|---|---|---|")
+    for sc in scenes:
+        for run in sorted({r["run"] for r in users if r["scene"] == sc}):
+            rs = [r for r in users if r["scene"] == sc and r["run"] == run]
+            ratios = []
+            for r in rs:
+                truth = [t for t in rows if t["scene"] == sc and t["seed"] == r["seed"] and t["noise"] == r["noise"]
+                         and t["run"] == run[: -len("+user")] and "ate_rmse_m" in t]
+                if truth and truth[0]["ate_rmse_m"] > 0:
+                    ratios.append(r["ate_rmse_m"] / truth[0]["ate_rmse_m"])
+            pair = lambda key, digits=1: (f'{med_worst([r.get("calib_" + key) for r in rs], digits)} → '
+                                          f'{med_worst([r.get("refined_" + key, r.get("calib_" + key)) for r in rs], digits)}')
+            print(f"| {sc} | {run} | {len(rs)} | {pair('clock_err_ms')} | {pair('extrinsic_err_mm')} | "
+                  f"{pair('extrinsic_err_deg', 3)} | {med_worst(ratios, 2)} |")
 PY
 }
 

@@ -8,7 +8,10 @@
 # also scored for what is off the static surfaces. KEEP_MAPS=1 keeps each run's maps (accuracy.sh
 # compares the maps of a cell with people against the same cell without).
 # SCENE+handheld carries the scene's route by hand (simulate --handheld).
-# Usage: scripts/accuracy_job.sh OUT SCENE SEED LEVEL [MODES...]   (modes: hvi vi hi hvi+loop)
+# A mode ending in +user is the user's run instead: `mmlio calibrate` on the bag with the preset (its
+# placeholder mount as the starting guess), then the run with that calibration, as the README says;
+# the row also gets the calibration's errors against the truth.
+# Usage: scripts/accuracy_job.sh OUT SCENE SEED LEVEL [MODES...]   (modes: hvi vi hi hvi+loop hvi+user ...)
 set -euo pipefail
 OUT="$1" SCENE="$2" SEED="$3" LEVEL="$4"
 shift 4
@@ -42,13 +45,31 @@ imu=(--acc-noise "$(echo "0.002*$LEVEL" | bc -l)" --gyro-noise "$(echo "0.0002*$
   > "$dir/simulate.log" 2>&1
 
 for run in "${MODES[@]}"; do
-  mode="${run%+loop}"
+  base_run="${run%+user}"
+  mode="${base_run%+loop}"
   loop_flag="--no-loop"
-  [ "$run" = "hvi+loop" ] && loop_flag=""
+  [ "$base_run" = "hvi+loop" ] && loop_flag=""
   rd="$dir/$run"
   status=ok
   code=0
-  "$MMLIO" -q run "$dir/$SCENE.bag" --config "$CONFIG_DIR/$mode.yaml" --calib "$dir/${SCENE}_truth.yaml" $loop_flag \
+  calib="$dir/${SCENE}_truth.yaml"
+  if [ "$base_run" != "$run" ]; then
+    # The user's rig file: the preset with the solid-state LiDAR's factory extrinsic (the truth's;
+    # a random mount draws it too), the spinning LiDAR on the preset's placeholder mount.
+    python3 - "$CONFIG_DIR/$mode.yaml" "$dir/${SCENE}_truth.yaml" "$dir/user_rig_$mode.yaml" <<'PY'
+import re, sys
+preset, truth, out = sys.argv[1:]
+matrix = re.search(r"livox:\s*\n\s*T_imu_sensor: (\[[^\]]*\])", open(truth).read()).group(1)
+text = open(preset).read()
+name = text.index("name: livox")
+m = re.compile(r"T_imu_sensor: \[[^\]]*\]").search(text, name)
+open(out, "w").write(text[:m.start()] + "T_imu_sensor: " + " ".join(matrix.split()) + text[m.end():])
+PY
+    calib="$dir/user_calib.yaml"
+    [ -f "$calib" ] || "$MMLIO" calibrate "$dir/$SCENE.bag" --config "$dir/user_rig_$mode.yaml" --out "$calib" \
+      > "$dir/calibrate.log" 2>&1 || code=$?
+  fi
+  [ "$code" -eq 0 ] && "$MMLIO" -q run "$dir/$SCENE.bag" --config "$CONFIG_DIR/$mode.yaml" --calib "$calib" $loop_flag \
     --no-progress --out "$rd" > "$rd.log" 2>&1 || code=$?
   [ "$code" -eq 3 ] && status=untrusted  # outputs written, the run says why they are not to be trusted
   [ "$code" -ne 0 ] && [ "$code" -ne 3 ] && status=failed
@@ -59,12 +80,30 @@ for run in "${MODES[@]}"; do
     ev=$("$MMLIO" evaluate --gt "$dir/${SCENE}_gt.tum" --est "$rd/trajectory.tum" --map "$rd/map.pcd" \
       "${removed[@]}" --scenario "$SCENE" --json 2>/dev/null || echo '{}')
   fi
-  python3 - "$CELL_SCENE" "$SEED" "$LEVEL" "$pattern" "$run" "$status" "$rd" "$ev" "$PEOPLE" <<'PY'
-import json, os, sys
-scene, seed, level, pattern, run, status, rd, ev, people = sys.argv[1:]
+  python3 - "$CELL_SCENE" "$SEED" "$LEVEL" "$pattern" "$run" "$status" "$rd" "$ev" "$PEOPLE" "$calib" \
+    "$dir/${SCENE}_truth.yaml" <<'PY'
+import json, math, os, re, sys
+scene, seed, level, pattern, run, status, rd, ev, people, calib, truth = sys.argv[1:]
 row = {"scene": scene, "seed": int(seed), "noise": int(level), "pattern": pattern, "people": int(people), "run": run,
        "status": status}
 row.update(json.loads(ev))
+def velodyne(path):
+    text = open(path).read()
+    m = re.search(r"velodyne:\s*\n\s*T_imu_sensor: \[([^\]]*)\]", text)
+    t = re.search(r"velodyne:[\s\S]*?time_offset_s: ([-0-9.e]+)", text)
+    v = [float(x) for x in m.group(1).replace("\n", " ").split(",")]
+    return [v[0:4], v[4:8], v[8:12]], float(t.group(1))
+def calibration_errors(est_path, prefix):
+    (Te, te), (Tt, tt) = velodyne(est_path), velodyne(truth)
+    row[prefix + "clock_err_ms"] = 1000 * (te - tt)
+    row[prefix + "extrinsic_err_mm"] = 1000 * math.dist([r[3] for r in Te], [r[3] for r in Tt])
+    tr = sum(Te[i][j] * Tt[i][j] for i in range(3) for j in range(3))
+    row[prefix + "extrinsic_err_deg"] = math.degrees(math.acos(max(-1.0, min(1.0, (tr - 1) / 2))))
+if run.endswith("+user") and os.path.exists(calib):
+    calibration_errors(calib, "calib_")
+refined = os.path.join(rd, "calibration_refined.yaml")
+if os.path.exists(refined):
+    calibration_errors(refined, "refined_")
 rep = os.path.join(rd, "report.json")
 if os.path.exists(rep):
     r = json.load(open(rep))
