@@ -9,14 +9,14 @@
 namespace mmlio::estimator {
 namespace {
 
-constexpr int kPose = 6;                      // dp, dtheta (right perturbation, as the LiDAR factors)
-constexpr std::size_t kMinMatches = 50;       // per LiDAR in a sweep that informs the calibration
-constexpr double kMaxResidualM = 0.1;         // the registration's gate: farther matches are other surfaces
-constexpr double kMaxStepPriorSigmas = 3.0;   // a sweep moving the estimate further is an outlier
-constexpr double kRelativeEigenFloor = 1e-9;  // pose directions weaker than this carry nothing
-constexpr double kHeldSigma = 1e-6;           // the prior of a quantity kept as given
-constexpr int kMinAnchorKeyframes = 5;        // an anchor map smaller than this matches too little of a sweep
-constexpr double kIndependentMatches = 100.0;
+constexpr int kPose = 6;                       // dp, dtheta (right perturbation, as the LiDAR factors)
+constexpr std::size_t kMinMatches = 50;        // per LiDAR in a sweep that informs the calibration
+constexpr double kMaxResidualM = 0.1;          // the registration's gate: farther matches are other surfaces
+constexpr double kMaxStepPriorSigmas = 3.0;    // a sweep moving the estimate further is an outlier
+constexpr double kRelativeEigenFloor = 1e-9;   // pose directions weaker than this carry nothing
+constexpr double kHeldSigma = 1e-6;            // the prior of a quantity kept as given
+constexpr int kMinAnchorKeyframes = 5;         // an anchor map smaller than this matches too little of a sweep
+constexpr double kIndependentMatches = 100.0;  // a sweep counts as at most this many matches
 // A correction is applied once its standard deviation is below these.
 constexpr double kDeterminedTimeS = 1e-3;
 constexpr double kDeterminedRotationRad = 0.05 * M_PI / 180.0;
