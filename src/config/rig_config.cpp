@@ -124,6 +124,9 @@ void bind(YamlBinder& b, estimator::OnlineCalibrationConfig& c) {
           "... and along its z, m (0: kept as given; floors and ceilings are all that observe it from a ground "
           "robot, and its estimate there was found biased)");
   b.field("memory_s", c.memory_s, "older sweeps' evidence fades with this time constant, s");
+  b.field("apply", c.apply,
+          "apply corrections while running, as they are determined (live nodes; mmlio run with rerun: false); "
+          "off: only estimated and reported, as a correction mid-run can leave the map inconsistent");
   b.field("rerun", c.rerun,
           "mmlio run: when the run settles on a calibration off from the one it started from by 2 ms, 0.1 deg or "
           "5 mm, run the bag again from it, at most 3 passes (what was mapped before the motion determined it "

@@ -239,6 +239,7 @@ Eigen::MatrixXd OnlineCalibration::priorInfo() const {
 // wrong): before, a clock error and a shift along the way the rig moves look alike, and a guess
 // between them would go into the map.
 void OnlineCalibration::applyDetermined() {
+  if (!cfg_.apply) return;
   const Eigen::VectorXd sigma =
       info_.ldlt().solve(Eigen::MatrixXd::Identity(x_.size(), x_.size())).diagonal().cwiseSqrt();
   const Eigen::VectorXd before = x_;

@@ -244,14 +244,15 @@ void writeRefinedCalibration(const std::string& path, const config::RigConfig& c
 }  // namespace
 
 RunResult runBag(const RunOptions& options) {
-  RunResult result = runPass(options);
   RunOptions pass = options;
+  const bool rerun = options.config.estimator.online_calibration.rerun && options.replays <= 1;
+  // Passes that may be run again keep their calibration fixed and only estimate it.
+  if (rerun) pass.config.estimator.online_calibration.apply = false;
+  RunResult result = runPass(pass);
   config::RigConfig result_config = options.config;  // the calibration `result` started from
   // Each pass starts from the calibration the one before settled on, until it settles on the one it
   // started from. Not for replays (a soak test) or a run that did not end normally.
-  for (int passes = 1; passes < kMaxPasses && options.config.estimator.online_calibration.rerun &&
-                       options.replays <= 1 && result.complete && !result.interrupted;
-       ++passes) {
+  for (int passes = 1; passes < kMaxPasses && rerun && result.complete && !result.interrupted; ++passes) {
     const std::vector<RunReport::RefinedCalibration>& refined = result.report.online_calibration;
     const std::string change = significantChange(refined);
     if (change.empty()) break;

@@ -123,6 +123,7 @@ TEST(OnlineCalibration, FindsAClockTwentyMillisecondsOffAndAMountADegreeAndTwoCe
   given.linear() = so3::exp(Eigen::Vector3d(0.3, 0.5, 0.8).normalized() * kDeg).toRotationMatrix() * given.linear();
   given.translation() += Eigen::Vector3d(0.6, -0.5, 0.62).normalized() * 0.02;
   OnlineCalibrationConfig cfg;
+  cfg.apply = true;
   cfg.prior_sigma_translation_z_m = 0.05;  // the height refined too
   const OnlineCalibration calib = drive(truth, givenAs(given), cfg, 300, 1);
   // What a next run starts from (the estimate where roughly determined) is within 3 of its sigmas.
@@ -139,6 +140,7 @@ TEST(OnlineCalibration, FindsAClockTwentyMillisecondsOffAndAMountADegreeAndTwoCe
 TEST(OnlineCalibration, LeavesARightCalibrationWhereItIs) {
   const Rig truth = spinningMount();
   OnlineCalibrationConfig cfg;
+  cfg.apply = true;
   cfg.prior_sigma_translation_z_m = 0.05;
   const OnlineCalibration calib = drive(truth, givenAs(truth.T_imu_spinning), cfg, 300, 2);
   const LidarCalibrationEstimate e = calib.estimates().at(0);
@@ -152,11 +154,29 @@ TEST(OnlineCalibration, KeepsTheHeightAsGivenByDefault) {
   truth.clock_error_s = -0.015;
   Eigen::Isometry3d given = truth.T_imu_spinning;
   given.translation() += Eigen::Vector3d(0.01, -0.01, 0.01);
-  const OnlineCalibration calib = drive(truth, givenAs(given), OnlineCalibrationConfig{}, 300, 3);
+  OnlineCalibrationConfig cfg;
+  cfg.apply = true;
+  const OnlineCalibration calib = drive(truth, givenAs(given), cfg, 300, 3);
   const LidarCalibrationEstimate e = calib.estimates().at(0);
   EXPECT_LT(std::abs(e.translation_m.z()), 1e-5);
   EXPECT_LT((e.translation_m.head<2>() - Eigen::Vector2d(-0.01, 0.01)).norm(), 0.004);  // x and y are refined
   EXPECT_NEAR(e.time_offset_s, -0.015, 0.002);                                          // and the clock
+}
+
+TEST(OnlineCalibration, OnlyEstimatesWhenItMayNotApply) {
+  Rig truth = spinningMount();
+  truth.clock_error_s = 0.012;
+  OnlineCalibrationConfig cfg;
+  cfg.apply = false;
+  const LidarExtrinsic given = givenAs(truth.T_imu_spinning);
+  const OnlineCalibration calib = drive(truth, given, cfg, 300, 4);
+  const LidarCalibrationEstimate e = calib.estimates().at(0);
+  EXPECT_TRUE(calib.extrinsic(0).isApprox(given.T_imu_sensor));
+  EXPECT_EQ(e.time_offset_s, 0.0);
+  // Measured through a fixed calibration, the estimate falls short of a large error (the robust loss
+  // shrinks it), which the next pass starts from.
+  EXPECT_GT(e.settled_time_offset_s, 0.5 * 0.012);
+  EXPECT_LT(e.settled_time_offset_s, 0.012 + 0.002);
 }
 
 TEST(OnlineCalibration, WithoutASolidStateLidarItIsOff) {

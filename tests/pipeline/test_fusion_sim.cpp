@@ -186,6 +186,7 @@ TEST(FusionOnSimulation, OnlineCalibrationCorrectsAClockOffsetTheConfigGotWrong)
   const sim::Simulator sim(so);
   const auto online = [&sim](config::RigConfig cfg, bool refine) {
     cfg.estimator.online_calibration.enabled = refine;
+    cfg.estimator.online_calibration.apply = refine;  // as live, applied while it runs
     Trajectory trajectory;
     pipeline::OnlinePipeline pipeline(cfg, "hvi", [&](const estimator::SweepResult& r) {
       if (r.status != estimator::SweepResult::Status::kInitializing)

@@ -35,6 +35,11 @@ struct OnlineCalibrationConfig {
   // Offline (mmlio run): when the run ends with a calibration that differs from the given one (2 ms,
   // 0.1 deg, 5 mm), the bag is run again from it. Read by the runner, not the odometry.
   bool rerun = true;
+  // Corrections go into the de-skew and placement as they are determined. Off by default: applied
+  // mid-run, a correction leaves the map built before it inconsistent with what follows (a stairs
+  // run went from 4.8 cm ATE with the same calibration fixed to 47 cm); mmlio run re-runs the bag
+  // instead (rerun), the live nodes report the estimate. Ignored by mmlio run while rerun is on.
+  bool apply = false;
 };
 
 /// One refined LiDAR's correction of its given calibration, and its standard deviations.
