@@ -141,7 +141,11 @@ bool OnlineCalibration::observe(const Features& f, const Eigen::Isometry3d& T_wo
       findMapMatches(thinned(f, given_.size(), kMatchedPerLidar), T_world_body, edge_map_, plane_map_, matching);
 
   std::vector<int> block(given_.size(), -1);  // column of each refined LiDAR's correction
-  for (std::size_t j = 0; j < refined_.size(); ++j) block[refined_[j].lidar] = kPose + static_cast<int>(kParams * j);
+  std::vector<Eigen::Vector3d> origin(given_.size(), Eigen::Vector3d::Zero());  // its sensor origin, IMU frame
+  for (std::size_t j = 0; j < refined_.size(); ++j) {
+    block[refined_[j].lidar] = kPose + static_cast<int>(kParams * j);
+    origin[refined_[j].lidar] = extrinsic(refined_[j].lidar).translation();
+  }
   std::vector<std::size_t> per_lidar(given_.size(), 0);
   const auto n = static_cast<Eigen::Index>(kPose + x_.size());
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
@@ -178,8 +182,7 @@ bool OnlineCalibration::observe(const Features& f, const Eigen::Isometry3d& T_wo
     const double norm = r.head(rows).norm();
     const double w = (norm <= huber_m_ ? 1.0 : huber_m_ / norm) / (lidar_sigma_m_ * lidar_sigma_m_);
     const Eigen::Matrix3d AR = A * R;
-    const Eigen::Matrix3d lever_hat =
-        own >= 0 ? so3::hat(m.p_body - extrinsic(m.source).translation()) : Eigen::Matrix3d::Zero();
+    const Eigen::Matrix3d lever_hat = own >= 0 ? so3::hat(m.p_body - origin[m.source]) : Eigen::Matrix3d::Zero();
     const Eigen::Vector3d clock = w_body.cross(m.p_body) + v_body;
     for (int i = 0; i < rows; ++i) {
       Row j = Row::Zero();

@@ -12,7 +12,6 @@
 #include "mmlio/config/source_options.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
-#include "mmlio/core/so3.hpp"
 #include "mmlio/core/timer.hpp"
 #include "mmlio/estimator/odometry.hpp"
 #include "mmlio/io/bag_source.hpp"
@@ -200,11 +199,8 @@ config::RigConfig withRefinedCalibration(config::RigConfig cfg,
   for (const RunReport::RefinedCalibration& c : refined)
     for (config::LidarConfig& l : cfg.lidars)
       if (l.name == c.given.name) {
-        const estimator::LidarCalibrationEstimate& e = c.last;
-        l.T_imu_sensor = c.given.T_imu_sensor;
-        l.T_imu_sensor.linear() = so3::exp(e.settled_rotation_rad).toRotationMatrix() * l.T_imu_sensor.linear();
-        l.T_imu_sensor.translation() += e.settled_translation_m;
-        l.time_offset_s = c.given.time_offset_s + e.settled_time_offset_s;
+        l.T_imu_sensor = c.T_imu_sensor;  // settled (System::refinedCalibration)
+        l.time_offset_s = c.given.time_offset_s + c.last.settled_time_offset_s;
       }
   return cfg;
 }
