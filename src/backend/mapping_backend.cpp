@@ -243,6 +243,19 @@ std::vector<Point> MappingBackend::mergedMap(const std::string* only_lidar) cons
 
 std::vector<Point> MappingBackend::map() const { return mergedMap(nullptr); }
 
+Session MappingBackend::session() const {
+  Session s;
+  s.map_voxel_m = cfg_.map_leaf_m;
+  s.cloud_voxel_m = cfg_.loop_cloud_voxel_m;
+  s.keyframes.reserve(graph_.size());
+  for (int k = 0; k < static_cast<int>(graph_.size()); ++k) {
+    const KeyframeNode& node = graph_.node(k);
+    s.keyframes.push_back({node.stamp_ns, graph_.pose(k), node.T_world_body_odom, node.cloud_body});
+  }
+  for (const PoseGraph::LoopEdge& e : graph_.loopEdges()) s.loops.push_back({e.from, e.to, e.T_from_to, e.information});
+  return s;
+}
+
 std::vector<Point> MappingBackend::dynamicMap() const { return dynamic_.points(); }
 
 void MappingBackend::judgeSubmaps(bool all) {

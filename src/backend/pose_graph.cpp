@@ -158,7 +158,14 @@ int PoseGraph::addKeyframe(KeyframeNode node) {
 }
 
 PoseGraph::Edge PoseGraph::edge(int from, int to, const Eigen::Isometry3d& T_from_to, const Matrix6d& information) {
-  return Edge{from, to, T_from_to, sqrtInformation(information), information.inverse()};
+  return Edge{from, to, T_from_to, sqrtInformation(information), information, information.inverse()};
+}
+
+std::vector<PoseGraph::LoopEdge> PoseGraph::loopEdges() const {
+  std::vector<LoopEdge> out;
+  out.reserve(loops_.size());
+  for (const Edge& e : loops_) out.push_back({e.from, e.to, e.T_from_to, e.information});
+  return out;
 }
 
 void PoseGraph::addLoop(int from, int to, const Eigen::Isometry3d& T_from_to, const Matrix6d& information) {

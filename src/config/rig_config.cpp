@@ -158,6 +158,8 @@ void bindOutput(YamlBinder& b, RigConfig& c) {
   b.field("map_voxel_m", c.mapping.map_leaf_m, "voxel size of the written map.pcd, m; 0 keeps every point");
   b.field("per_lidar_maps", c.mapping.per_lidar_maps, "also write one map_<lidar>.pcd per LiDAR");
   b.field("write_kitti", c.output.write_kitti, "also write the trajectory in KITTI format (poses + times.txt)");
+  b.field("write_session", c.output.write_session,
+          "write session/: keyframes, clouds, loops and map for a later run (docs/session.md)");
   b.field("dynamic_map", c.mapping.dynamic_map, "also write map_dynamic.pcd: the points removed as moving objects");
 }
 

@@ -213,6 +213,10 @@ Json toJson(const RunReport& r) {
     out["map_voxel_m"] = r.outputs.map_voxel_m;
     if (!r.outputs.per_lidar_maps.empty()) out["per_lidar_maps"] = r.outputs.per_lidar_maps;
     if (!r.outputs.dynamic_map.empty()) out["dynamic_map"] = r.outputs.dynamic_map;
+    if (!r.outputs.session.empty()) {
+      out["session"] = r.outputs.session;
+      out["session_keyframes"] = r.outputs.session_keyframes;
+    }
   }
   if (r.evaluation) rep["evaluation"] = evaluationJson(*r.evaluation);
   return rep;

@@ -7,6 +7,7 @@
 #include "mmlio/core/log.hpp"
 #include "mmlio/core/so3.hpp"
 #include "mmlio/io/pcd_io.hpp"
+#include "mmlio/io/session_io.hpp"
 #include "mmlio/io/trajectory_writer.hpp"
 #include "mmlio/pipeline/odometry_setup.hpp"
 #include "mmlio/pipeline/report.hpp"
@@ -225,10 +226,12 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
   Trajectory trajectory;
   std::vector<Point> map_points, dynamic_map;
   std::map<std::string, std::vector<Point>> lidar_maps;
+  Session session;
   Stopwatch assembly;
   mapping_.read([&](const backend::MappingBackend& b) {
     trajectory = inputTime(b.corrected(odometry_poses_));
     map_points = b.map();
+    session = b.session();
     if (cfg_.mapping.dynamic_map) dynamic_map = b.dynamicMap();
     for (const std::string& lidar : b.lidarNames()) lidar_maps[lidar] = b.lidarMap(lidar);
   });
@@ -256,6 +259,15 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
   if (cfg_.mapping.dynamic_map) {
     io::writePcdBinary(dir + "map_dynamic.pcd", dynamic_map);
     out.dynamic_map = dir + "map_dynamic.pcd";
+  }
+  if (cfg_.output.write_session) {
+    for (SessionKeyframe& k : session.keyframes) k.stamp_ns = online_.externalStamp(k.stamp_ns);
+    session.map = map_points;
+    out.session = dir + "session";
+    out.session_keyframes = session.keyframes.size();
+    io::writeSession(out.session, session,
+                     {io::kSessionFormatVersion, report.run.mmlio_version, report.run.commit, report.input.mode,
+                      report.run.config_yaml});
   }
   writeReports(dir, report, trajectory, map_points, gt_path);
   return report;

@@ -17,6 +17,8 @@
 #include "mmlio/config/rig_config.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/eval/evaluation.hpp"
+#include "mmlio/io/session_io.hpp"
+#include "mmlio/io/trajectory_writer.hpp"
 #include "mmlio/pipeline/imu_gate.hpp"
 #include "mmlio/pipeline/runner.hpp"
 #include "mmlio/pipeline/system.hpp"
@@ -345,6 +347,20 @@ TEST(RunBag, TheReportNamesItsMmlioAndTheConfigThatRerunsTheRunExactly) {
   const config::RigConfig used = config::loadRigConfig(options.out_dir + "/config_used.yaml");
   EXPECT_EQ(used.mode, "vi");
   EXPECT_EQ(config::toYaml(used), run["config_yaml"].get<std::string>());
+  // The session holds the same config, and its keyframes are poses of the trajectory written.
+  io::SessionInfo info;
+  const Session session = io::readSession(options.out_dir + "/session", &info);
+  EXPECT_EQ(info.rig_yaml, run["config_yaml"].get<std::string>());
+  EXPECT_EQ(info.mode, "vi");
+  ASSERT_GE(session.keyframes.size(), 2u);
+  EXPECT_EQ(report["outputs"]["session_keyframes"].get<std::size_t>(), session.keyframes.size());
+  const Trajectory written = io::readTum(options.out_dir + "/trajectory.tum");
+  for (const SessionKeyframe& k : session.keyframes) {
+    const auto at =
+        std::find_if(written.begin(), written.end(), [&](const StampedPose& p) { return p.stamp_ns == k.stamp_ns; });
+    ASSERT_NE(at, written.end()) << "keyframe stamp " << k.stamp_ns << " is no pose of trajectory.tum";
+    EXPECT_TRUE(at->T_world_body.isApprox(k.T_map_body, 1e-6));
+  }
   RunOptions again = options;
   again.config = used;
   again.mode.clear();

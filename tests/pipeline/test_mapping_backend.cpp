@@ -81,6 +81,34 @@ TEST(MappingBackend, ClosesTheLoopOfTheLastKeyframeWhenTheRunFinishes) {
   EXPECT_EQ(backend.loops(), 1u);
 }
 
+// What a later run needs: every keyframe at its corrected pose (the trajectory's pose at its
+// stamp), its odometry pose and cloud, and the loop as it was added.
+TEST(MappingBackend, ItsSessionHoldsTheKeyframesAtTheirCorrectedPosesAndTheLoop) {
+  const auto scene = backend::testing::roomA();
+  const Walk w = roomWalk();
+  backend::MappingBackend backend(config());
+  for (std::size_t i = 0; i < w.truth.size(); ++i) backend.addSweep(sweepAt(w, i, scene));
+  backend.finish();
+  ASSERT_EQ(backend.loops(), 1u);
+  const Session s = backend.session();
+  ASSERT_EQ(s.keyframes.size(), 6u);
+  const Trajectory corrected = backend.corrected(odometryLog(w));
+  for (std::size_t k = 0; k < s.keyframes.size(); ++k) {
+    EXPECT_EQ(s.keyframes[k].stamp_ns, w.stamps[k]);
+    EXPECT_TRUE(s.keyframes[k].T_map_body.isApprox(corrected[k].T_world_body, 1e-9)) << "keyframe " << k;
+    EXPECT_TRUE(s.keyframes[k].T_odom_body.isApprox(w.odometry[k], 1e-12)) << "keyframe " << k;
+    EXPECT_GT(s.keyframes[k].cloud_body.size(), 100u) << "keyframe " << k;
+  }
+  // The last keyframe is corrected back onto the start, the loop ties it to the first.
+  EXPECT_LT((s.keyframes[5].T_map_body.translation() - w.truth[5].translation()).norm(), 0.05);
+  ASSERT_EQ(s.loops.size(), 1u);
+  EXPECT_EQ(s.loops[0].from, 0);
+  EXPECT_EQ(s.loops[0].to, 5);
+  EXPECT_TRUE(s.loops[0].T_from_to.isApprox(w.truth[0].inverse() * w.truth[5], 0.02));
+  EXPECT_GT(s.loops[0].information(0, 0), 0.0);
+  EXPECT_EQ(s.map_voxel_m, config().map_leaf_m);
+}
+
 TEST(MappingBackend, FinishDoesNothingWithLoopClosureOff) {
   const auto scene = backend::testing::roomA();
   const Walk w = roomWalk();

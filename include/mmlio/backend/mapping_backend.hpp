@@ -15,6 +15,7 @@
 #include "mmlio/backend/pose_graph.hpp"
 #include "mmlio/core/flat_key_index.hpp"
 #include "mmlio/core/pose_log.hpp"
+#include "mmlio/core/session.hpp"
 #include "mmlio/estimator/odometry.hpp"
 
 namespace mmlio::backend {
@@ -61,6 +62,9 @@ class MappingBackend {
   /// With per_lidar_maps: the names of the LiDARs seen, and one LiDAR's map (empty if unknown).
   std::vector<std::string> lidarNames() const;
   std::vector<Point> lidarMap(const std::string& lidar) const;
+  /// The keyframes (estimator stamps), their clouds and the loops, for a later run (no map: the
+  /// caller has it from map(), which costs an assembly).
+  Session session() const;
   std::size_t keyframes() const;
   std::size_t loops() const;
   LoopFigures loopFigures() const;

@@ -76,6 +76,13 @@ class PoseGraph {
   /// Current estimate of T_world_body of keyframe i (its odometry pose until optimised).
   Eigen::Isometry3d pose(int i) const;
   std::size_t loops() const { return loops_.size(); }
+  /// The loop edges as added (addLoop's arguments).
+  struct LoopEdge {
+    int from, to;
+    Eigen::Isometry3d T_from_to;
+    Matrix6d information;
+  };
+  std::vector<LoopEdge> loopEdges() const;
   /// Length of the shortest route between keyframes a and b through the graph, m: an odometry edge
   /// counts the distance the odometry travelled along it, a loop edge nothing (it ties its ends).
   /// What the estimate of b relative to a can have drifted over: after loops, far less than the
@@ -95,7 +102,8 @@ class PoseGraph {
     int from, to;
     Eigen::Isometry3d T_from_to;
     Matrix6d sqrt_information;  // upper-triangular, r^T I r = |S r|^2
-    Matrix6d covariance;        // odometry edges: of T_from_to, kept to compose folded edges
+    Matrix6d information;
+    Matrix6d covariance;  // odometry edges: of T_from_to, kept to compose folded edges
   };
   static Edge edge(int from, int to, const Eigen::Isometry3d& T_from_to, const Matrix6d& information);
   /// Distance the odometry travelled from keyframe i to i + 1, m.

@@ -42,7 +42,8 @@ struct ImuConfig {
 };
 
 struct OutputConfig {
-  bool write_kitti = false;  // also write trajectory.kitti + times.txt
+  bool write_kitti = false;   // also write trajectory.kitti + times.txt
+  bool write_session = true;  // OUT/session/: keyframes, clouds, loops and map for a later run
 };
 
 /// The two LiDARs of the reference rig (Velodyne VLP-16 + Livox Horizon with its built-in IMU).

@@ -76,8 +76,8 @@ struct RunReport {
     std::vector<Sample> series;  // about one a second
   };
   struct Outputs {
-    std::string trajectory, map, dynamic_map;
-    std::size_t poses = 0, map_points = 0;
+    std::string trajectory, map, dynamic_map, session;
+    std::size_t poses = 0, map_points = 0, session_keyframes = 0;
     double map_voxel_m = 0.0;
     std::map<std::string, std::string> per_lidar_maps;
   };
