@@ -42,19 +42,17 @@ std::array<Eigen::Vector3d, 2> horizontalAxes(const std::vector<Eigen::Vector3d>
 
 }  // namespace
 
-struct LoopCloser::Verification {
-  bool accepted = false;
-  IcpResult icp;
-  std::string reason;
-};
-
 LoopCloser::LoopCloser() : LoopCloser(Config{}) {}
 
-LoopCloser::LoopCloser(Config cfg) : cfg_(std::move(cfg)) {
-  icp_.max_corr_coarse_m = cfg_.icp_max_corr_m;
-  icp_.max_corr_fine_m = std::min(cfg_.icp_max_corr_m, 0.25);
-  icp_.voxel_fine_m = cfg_.submap_voxel_m;
+IcpConfig LoopCloser::Config::icp() const {
+  IcpConfig c;
+  c.max_corr_coarse_m = icp_max_corr_m;
+  c.max_corr_fine_m = std::min(icp_max_corr_m, 0.25);
+  c.voxel_fine_m = submap_voxel_m;
+  return c;
 }
+
+LoopCloser::LoopCloser(Config cfg) : cfg_(std::move(cfg)), icp_(cfg_.icp()) {}
 
 void LoopCloser::forget(int keyframe) {
   if (keyframe >= 0 && static_cast<std::size_t>(keyframe) < descriptors_.size())
@@ -68,9 +66,8 @@ const ScanContext& LoopCloser::descriptor(const PoseGraph& graph, int i) const {
   return *slot;
 }
 
-LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, int match,
-                                            const Eigen::Isometry3d& prior, bool by_distance) const {
-  Verification v;
+AlignmentCheck LoopCloser::verify(const PoseGraph& graph, int query, int match, const Eigen::Isometry3d& prior,
+                                  bool by_distance) const {
   // Target: keyframes around the match, in the match's body frame, all old enough.
   const Stamp latest = graph.node(query).stamp_ns - fromSec(cfg_.min_time_gap_s);
   const int half = std::max(0, cfg_.submap_keyframes / 2);
@@ -82,20 +79,25 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
     for (const auto& p : graph.node(i).cloud_body) submap.push_back(T_match_i * p);
   }
   const IcpTarget target(map::voxelCentroids(submap, cfg_.submap_voxel_m));
-  const auto& source = graph.node(query).cloud_body;
+  return checkAlignment(graph.node(query).cloud_body, target, prior, by_distance, cfg_, icp_);
+}
 
+AlignmentCheck checkAlignment(const std::vector<Eigen::Vector3d>& source, const IcpTarget& target,
+                              const Eigen::Isometry3d& prior, bool by_distance, const LoopCloser::Config& cfg,
+                              const IcpConfig& icp) {
+  AlignmentCheck v;
   // A distance candidate's prior is close to the alignment, which changes the weakest direction's
   // information only a little: a place that is clearly degenerate at the prior is rejected
   // without the ICP (in a corridor, most candidates). Descriptor priors (yaw only) are not.
-  IcpConfig at_pose = icp_;
+  IcpConfig at_pose = icp;
   at_pose.levels = 1;
   at_pose.max_iterations_per_level = 0;  // only the final statistics (at the finest gate), at the pose given
-  const auto clearlyDegenerate = [this](const IcpResult& probe, double fraction) {
-    return probe.converged && probe.min_translation_eigenvalue < fraction * cfg_.min_translation_eigenvalue;
+  const auto clearlyDegenerate = [&cfg](const IcpResult& probe, double fraction) {
+    return probe.converged && probe.min_translation_eigenvalue < fraction * cfg.min_translation_eigenvalue;
   };
-  if (by_distance && cfg_.prior_eigenvalue_fraction > 0) {
+  if (by_distance && cfg.prior_eigenvalue_fraction > 0) {
     const IcpResult probe = alignPointToPlane(source, target, prior, at_pose);
-    if (clearlyDegenerate(probe, cfg_.prior_eigenvalue_fraction)) {
+    if (clearlyDegenerate(probe, cfg.prior_eigenvalue_fraction)) {
       v.icp = probe;
       v.reason =
           "degenerate geometry at the prior (translation eigenvalue " + fmt(probe.min_translation_eigenvalue) + ")";
@@ -105,14 +107,14 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
   // The prior can be a metre off, but after the ICP's coarsest level the pose is close to the final
   // one and so is the weakest direction's information: a place still clearly short of it there is
   // rejected before the finer levels, which cost the most.
-  IcpConfig staged = icp_;
+  IcpConfig staged = icp;
   IcpResult after_coarse;
   bool degenerate_after_coarse = false;
-  if (by_distance && cfg_.coarse_eigenvalue_fraction > 0)
+  if (by_distance && cfg.coarse_eigenvalue_fraction > 0)
     staged.continue_after_level = [&](int level, const Eigen::Isometry3d& T) {
       if (level > 0) return true;
       after_coarse = alignPointToPlane(source, target, T, at_pose);
-      degenerate_after_coarse = clearlyDegenerate(after_coarse, cfg_.coarse_eigenvalue_fraction);
+      degenerate_after_coarse = clearlyDegenerate(after_coarse, cfg.coarse_eigenvalue_fraction);
       return !degenerate_after_coarse;
     };
   v.icp = alignPointToPlane(source, target, prior, staged);
@@ -127,22 +129,22 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
     v.reason = "ICP did not converge (" + std::to_string(r.correspondences) + " correspondences)";
     return v;
   }
-  if (r.fitness_m > cfg_.max_fitness_m) {
-    v.reason = "fitness " + fmt(r.fitness_m) + " m > " + fmt(cfg_.max_fitness_m);
+  if (r.fitness_m > cfg.max_fitness_m) {
+    v.reason = "fitness " + fmt(r.fitness_m) + " m > " + fmt(cfg.max_fitness_m);
     return v;
   }
-  if (r.overlap < cfg_.min_overlap) {
-    v.reason = "overlap " + fmt(r.overlap) + " < " + fmt(cfg_.min_overlap);
+  if (r.overlap < cfg.min_overlap) {
+    v.reason = "overlap " + fmt(r.overlap) + " < " + fmt(cfg.min_overlap);
     return v;
   }
-  if (r.min_translation_eigenvalue < cfg_.min_translation_eigenvalue) {
+  if (r.min_translation_eigenvalue < cfg.min_translation_eigenvalue) {
     v.reason = "degenerate geometry (translation eigenvalue " + fmt(r.min_translation_eigenvalue) + ")";
     return v;
   }
   if (by_distance) {
     const Eigen::Isometry3d correction = prior.inverse() * r.T_target_source;
     const double angle_deg = Eigen::AngleAxisd(correction.rotation()).angle() * kRadToDeg;
-    if (correction.translation().norm() > cfg_.max_correction_m || angle_deg > cfg_.max_correction_deg) {
+    if (correction.translation().norm() > cfg.max_correction_m || angle_deg > cfg.max_correction_deg) {
       v.reason = "correction " + fmt(correction.translation().norm()) + " m / " + fmt(angle_deg) +
                  " deg from the prior exceeds the bound";
       return v;
@@ -151,37 +153,37 @@ LoopCloser::Verification LoopCloser::verify(const PoseGraph& graph, int query, i
   // Uniqueness: restart from the solution shifted along the horizontal principal axes.
   // Restarts run coarse (cheap); one that ends at a distinct place is refined at full resolution
   // before its fitness and overlap are compared with the solution's.
-  IcpConfig restart = icp_;
+  IcpConfig restart = icp;
   restart.levels = 2;
-  restart.voxel_fine_m = std::max(icp_.voxel_fine_m, 0.3);
-  restart.max_corr_fine_m = std::max(icp_.max_corr_fine_m, 0.5);
+  restart.voxel_fine_m = std::max(icp.voxel_fine_m, 0.3);
+  restart.max_corr_fine_m = std::max(icp.max_corr_fine_m, 0.5);
   restart.max_iterations_per_level = 10;
   restart.max_source_points = kMaxRestartSourcePoints;
   const auto axes = horizontalAxes(map::voxelCentroids(source, 0.5), r.T_target_source);
   for (const auto& axis : axes)
-    for (double shift : cfg_.ambiguity_shifts_m)
+    for (double shift : cfg.ambiguity_shifts_m)
       for (double sign : {-1.0, 1.0}) {
         Eigen::Isometry3d guess = r.T_target_source;
         guess.pretranslate(sign * shift * axis);
         const IcpResult coarse = alignPointToPlane(source, target, guess, restart);
         if (!coarse.converged) continue;
         if ((coarse.T_target_source.translation() - r.T_target_source.translation()).norm() <
-            cfg_.ambiguity_min_separation_m)
+            cfg.ambiguity_min_separation_m)
           continue;
         // The coarse overlap (wider gate) bounds the fine one from above, roughly: skip hopeless ones.
-        if (coarse.overlap < cfg_.ambiguity_overlap_ratio * r.overlap) continue;
-        IcpConfig fine = icp_;
+        if (coarse.overlap < cfg.ambiguity_overlap_ratio * r.overlap) continue;
+        IcpConfig fine = icp;
         fine.levels = 1;
-        fine.max_corr_coarse_m = icp_.max_corr_fine_m;
-        fine.voxel_coarse_m = icp_.voxel_fine_m;
+        fine.max_corr_coarse_m = icp.max_corr_fine_m;
+        fine.voxel_coarse_m = icp.voxel_fine_m;
         fine.max_source_points = kMaxRestartSourcePoints;
         const IcpResult alt = alignPointToPlane(source, target, coarse.T_target_source, fine);
         if (!alt.converged) continue;
         const double separation = (alt.T_target_source.translation() - r.T_target_source.translation()).norm();
-        if (separation < cfg_.ambiguity_min_separation_m) continue;
-        if (alt.fitness_m <= cfg_.ambiguity_fitness_ratio * r.fitness_m &&
-            alt.overlap >= cfg_.ambiguity_overlap_ratio * r.overlap && alt.fitness_m <= cfg_.max_fitness_m &&
-            alt.overlap >= cfg_.min_overlap) {
+        if (separation < cfg.ambiguity_min_separation_m) continue;
+        if (alt.fitness_m <= cfg.ambiguity_fitness_ratio * r.fitness_m &&
+            alt.overlap >= cfg.ambiguity_overlap_ratio * r.overlap && alt.fitness_m <= cfg.max_fitness_m &&
+            alt.overlap >= cfg.min_overlap) {
           v.reason = "ambiguous: an alignment " + fmt(separation) + " m away fits as well (fitness " +
                      fmt(alt.fitness_m) + " vs " + fmt(r.fitness_m) + ", overlap " + fmt(alt.overlap) + " vs " +
                      fmt(r.overlap) + ")";
@@ -259,7 +261,7 @@ LoopResult LoopCloser::detect(const PoseGraph& graph, int query, const HeadingCh
   }
   for (const Candidate& c : candidates) {
     ++result.candidates_tried;
-    const Verification v = verify(graph, query, c.index, c.prior, c.by_distance);
+    const AlignmentCheck v = verify(graph, query, c.index, c.prior, c.by_distance);
     result.match = c.index;
     result.T_match_query = v.icp.T_target_source;
     result.fitness_m = v.icp.fitness_m;

@@ -37,6 +37,12 @@ struct LoopResult {
   std::string reason;          // why accepted / why the last candidate was rejected
 };
 
+struct AlignmentCheck {
+  bool accepted = false;
+  IcpResult icp;
+  std::string reason;  // why accepted / rejected
+};
+
 class LoopCloser {
  public:
   struct Config {
@@ -76,6 +82,8 @@ class LoopCloser {
     double loop_sigma_translation_m = 0.01;
     double loop_sigma_rotation_rad = 0.001;
     ScanContextConfig descriptor;
+    /// The ICP settings of a verification (from icp_max_corr_m and submap_voxel_m).
+    IcpConfig icp() const;
   };
 
   LoopCloser();
@@ -94,14 +102,22 @@ class LoopCloser {
   const Config& config() const { return cfg_; }
 
  private:
-  struct Verification;
-  Verification verify(const PoseGraph& graph, int query, int match, const Eigen::Isometry3d& prior,
-                      bool by_distance) const;
+  AlignmentCheck verify(const PoseGraph& graph, int query, int match, const Eigen::Isometry3d& prior,
+                        bool by_distance) const;
   const ScanContext& descriptor(const PoseGraph& graph, int i) const;
 
   Config cfg_;
   IcpConfig icp_;
   mutable std::vector<std::optional<ScanContext>> descriptors_;
 };
+
+/// The checks a loop closure (and a relocalization) must pass: `source` aligned onto `target` by
+/// ICP from `prior`, then fitness, overlap, the weakest horizontal direction's information, a
+/// bounded correction from the prior when `by_distance` (a degenerate prior is also rejected before
+/// the ICP then), and uniqueness (restarts shifted along the scene's horizontal axes find no other
+/// alignment as good).
+AlignmentCheck checkAlignment(const std::vector<Eigen::Vector3d>& source, const IcpTarget& target,
+                              const Eigen::Isometry3d& prior, bool by_distance, const LoopCloser::Config& cfg,
+                              const IcpConfig& icp);
 
 }  // namespace mmlio::backend
