@@ -86,9 +86,9 @@ void writeInto(const fs::path& dir, const Session& s, const SessionInfo& info) {
   for (const SessionKeyframe& k : s.keyframes) cloud_points += k.cloud_body.size();
   writeFileAtomically((dir / "session.yaml").string(), [&](std::ostream& os) {
     os << "# An mmlio session: what a later run needs to localize in this map and extend it (docs/session.md)\n"
-       << "format: " << kFormatName << "\nformat_version: " << info.format_version
-       << "\nmmlio_version: \"" << info.mmlio_version << "\"\ncommit: \"" << info.commit << "\"\nmode: \""
-       << info.mode << "\"\nkeyframes: " << s.keyframes.size() << "\nloops: " << s.loops.size()
+       << "format: " << kFormatName << "\nformat_version: " << info.format_version << "\nmmlio_version: \""
+       << info.mmlio_version << "\"\ncommit: \"" << info.commit << "\"\nmode: \"" << info.mode
+       << "\"\nkeyframes: " << s.keyframes.size() << "\nloops: " << s.loops.size()
        << "\nkeyframe_cloud_points: " << cloud_points << "\nmap_points: " << s.map.size()
        << "\nmap_voxel_m: " << formatDouble(s.map_voxel_m) << "\ncloud_voxel_m: " << formatDouble(s.cloud_voxel_m)
        << '\n';
@@ -207,8 +207,8 @@ Session readSession(const std::string& dir, SessionInfo* info_out) {
     for (int i = 0; i < 36; ++i) l.information(i / 6, i % 6) = row.number();
     row.end();
     if (static_cast<std::size_t>(std::max(l.from, l.to)) >= s.keyframes.size())
-      throw Error((root / "loops.txt").string() + ": a loop ends at keyframe " + std::to_string(std::max(l.from, l.to)) +
-                  " of " + std::to_string(s.keyframes.size()));
+      throw Error((root / "loops.txt").string() + ": a loop ends at keyframe " +
+                  std::to_string(std::max(l.from, l.to)) + " of " + std::to_string(s.keyframes.size()));
     s.loops.push_back(l);
   });
   if (s.loops.size() != loops)

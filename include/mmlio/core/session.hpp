@@ -19,17 +19,17 @@ struct SessionKeyframe {
 };
 
 struct SessionLoop {
-  int from = 0, to = 0;                                          // keyframe indices
-  Eigen::Isometry3d T_from_to = Eigen::Isometry3d::Identity();  // `to`'s body frame into `from`'s
+  int from = 0, to = 0;                                                               // keyframe indices
+  Eigen::Isometry3d T_from_to = Eigen::Isometry3d::Identity();                        // `to`'s body frame into `from`'s
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Identity();  // (dp, dtheta) order
 };
 
 struct Session {
   std::vector<SessionKeyframe> keyframes;
   std::vector<SessionLoop> loops;
-  std::vector<Point> map;   // map frame (the first keyframe's world), map_voxel_m voxels
-  double map_voxel_m = 0;   // the map's voxel size
-  double cloud_voxel_m = 0; // the keyframe clouds' voxel size
+  std::vector<Point> map;    // map frame (the first keyframe's world), map_voxel_m voxels
+  double map_voxel_m = 0;    // the map's voxel size
+  double cloud_voxel_m = 0;  // the keyframe clouds' voxel size
 };
 
 }  // namespace mmlio
