@@ -19,6 +19,7 @@ struct SensorRotation {
   Stamp t0_ns = 0, t1_ns = 0;
   Eigen::Vector3d rotvec = Eigen::Vector3d::Zero();
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();  // of the sensor, in its frame at t0
+  int stride = 1;                                         // sweeps between the two compared
 };
 
 /// Gyro-based de-skew of the sweeps before their scan-to-scan registration, at a trial offset.
@@ -63,6 +64,9 @@ struct TimeOffsetResult {
   double offset_s = 0, sigma_s = 0;  // t_imu = t_stamp + offset_s
   int increments = 0;                // used
   double rms_rad = 0;                // residual rotation mismatch per increment at the estimate
+  // The standard deviation of the offsets each stride gives alone (0 when not computed): errors
+  // that depend on the interval compared, which the jackknife over runs of increments cannot see.
+  double stride_spread_s = 0;
   std::string message;
   std::string advice;  // when the sigma exceeds the config's max_sigma_s: which motion would pin it
 };
@@ -77,8 +81,9 @@ TimeOffsetResult estimateTimeOffset(const std::vector<SensorRotation>& rotations
 
 /// The whole temporal calibration: raw scan-to-scan rotations give a first offset, then the
 /// turning sweeps are de-skewed with the gyroscope at the current offset and re-registered, over
-/// cfg.strides, until the offset moves by less than a step (at most max_rounds). When the stated
-/// sigma exceeds cfg.max_sigma_s, `advice` says which motion would determine it.
+/// cfg.strides, until the offset moves by less than a step (at most max_rounds). The stated sigma
+/// is at least the spread of the offsets the strides give alone. When it exceeds cfg.max_sigma_s,
+/// `advice` says which motion would determine it.
 TimeOffsetResult calibrateTimeOffset(const std::vector<LidarScan>& sweeps, const Eigen::Isometry3d& T_imu_sensor,
                                      const std::vector<ImuSample>& imu, const Eigen::Vector3d& gyro_bias,
                                      const TimeOffsetConfig& cfg = TimeOffsetConfig(), int max_rounds = 4);
