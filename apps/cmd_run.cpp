@@ -1,11 +1,14 @@
 // mmlio run BAG: the main job, bag in -> trajectory, map and report out.
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <csignal>
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <sstream>
+#include <vector>
 
 #include "commands.hpp"
 #include "mmlio/config/calib_file.hpp"
@@ -13,6 +16,7 @@
 #include "mmlio/config/rig_config.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
+#include "mmlio/io/session_io.hpp"
 #include "mmlio/pipeline/bag_calibration.hpp"
 #include "mmlio/pipeline/runner.hpp"
 
@@ -21,6 +25,8 @@ namespace {
 
 struct RunArgs {
   std::string bag, config, out = "mmlio_out", mode, calib, gt;
+  std::string session;       // localize: the session folder
+  std::string initial_pose;  // localize: "x,y,z,yaw_deg" in the session's map frame
   bool no_progress = false, no_loop = false;
   double duration_s = 0.0;
   double max_degraded_percent = 25.0;
@@ -46,6 +52,39 @@ void applyCalibrationSource(config::RigConfig& cfg, const std::string& calib_ove
   std::printf("written: %s/calib.yaml\n", out_dir.c_str());
 }
 
+/// "x,y,z,yaw_deg" as T_map_body (roll and pitch 0: the odometry's gravity fixes them).
+Eigen::Isometry3d parseInitialPose(const std::string& text) {
+  std::vector<double> v;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) {
+    char* end = nullptr;
+    const double x = std::strtod(item.c_str(), &end);
+    if (item.empty() || *end != '\0' || !std::isfinite(x))
+      throw Error("--initial-pose '" + text + "': expected x,y,z,yaw_deg (four numbers)");
+    v.push_back(x);
+  }
+  if (v.size() != 4) throw Error("--initial-pose '" + text + "': expected x,y,z,yaw_deg (four numbers)");
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(v[3] * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
+  return T;
+}
+
+/// The rig must be the one that made the session: the same LiDARs, by name and kind.
+void checkRigMatchesSession(const config::RigConfig& cfg, const std::string& session_dir) {
+  const std::string path = session_dir + "/rig.yaml";
+  if (!std::filesystem::exists(path)) return;  // readSession names the missing file
+  const config::RigConfig made_by = config::loadRigConfig(path);
+  const auto describe = [](const config::RigConfig& c) {
+    std::string out;
+    for (const config::LidarConfig& l : c.lidars) out += (out.empty() ? "" : ", ") + l.name + " (" + l.type + ")";
+    return out;
+  };
+  if (describe(made_by) != describe(cfg))
+    throw Error("the rig config's LiDARs [" + describe(cfg) + "] are not the session's [" + describe(made_by) + "] (" +
+                path + "): localize with the rig that mapped, e.g. --config " + path);
+}
+
 std::atomic<bool> g_stop{false};
 
 extern "C" void onStopSignal(int signal) {
@@ -54,13 +93,21 @@ extern "C" void onStopSignal(int signal) {
 }
 
 void run(const RunArgs& a) {
+  // localize: the session and the hint are checked before anything else is done or said.
+  std::shared_ptr<const Session> session;
+  std::optional<Eigen::Isometry3d> initial_pose;
+  if (!a.session.empty()) {
+    if (!a.initial_pose.empty()) initial_pose = parseInitialPose(a.initial_pose);
+    session = std::make_shared<const Session>(io::readSession(a.session));
+  }
   config::RigConfig cfg;
   if (a.config.empty()) {
     log::emit(log::Level::kInfo, "no --config: using the built-in defaults (same as config/hvi.yaml)");
   } else {
     cfg = config::loadRigConfig(a.config);
   }
-  if (a.no_loop) cfg.mapping.loop_enabled = false;
+  if (a.no_loop || session) cfg.mapping.loop_enabled = false;
+  if (session) checkRigMatchesSession(cfg, a.session);
   applyCalibrationSource(cfg, a.calib, a.bag, a.out);
   const std::string mode = a.mode.empty() ? cfg.mode : a.mode;
   if (config::isValidMode(mode))
@@ -77,6 +124,9 @@ void run(const RunArgs& a) {
   options.progress = !a.no_progress;
   options.gt_path = a.gt;
   options.max_duration_s = a.duration_s;
+  options.session = session;
+  options.session_dir = a.session;
+  options.initial_pose = initial_pose;
   options.stop = &g_stop;
   options.trust.max_degraded_fraction = a.max_degraded_percent / 100.0;
   options.trust.max_drift_sigma_m = a.max_drift_m;
@@ -86,10 +136,19 @@ void run(const RunArgs& a) {
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
 
-  std::cout << "trajectory: " << a.out << "/trajectory.tum (" << r.trajectory.size() << " poses)\n"
-            << "map:        " << a.out << "/map.pcd (" << r.map_points << " points)\n"
-            << "report:     " << a.out << "/report.json, " << a.out << "/report.md\n\n"
-            << r.timing.table();
+  std::cout << "trajectory: " << a.out << "/trajectory.tum (" << r.trajectory.size() << " poses"
+            << (a.session.empty() ? "" : ", in the session's map frame") << ")\n";
+  if (a.session.empty()) std::cout << "map:        " << a.out << "/map.pcd (" << r.map_points << " points)\n";
+  std::cout << "report:     " << a.out << "/report.json, " << a.out << "/report.md\n\n" << r.timing.table();
+  if (r.report.localization.enabled) {
+    const pipeline::RunReport::Localization& l = r.report.localization;
+    if (l.localized)
+      std::printf(
+          "\nlocalized %.1f s after the start; %d keyframes of %d fit the map; %zu spells lost, %d relocalizations\n",
+          l.first_localized_s, l.keyframes_fitted, l.keyframes, l.lost_s.size(), l.relocalizations);
+    else
+      std::printf("\nnot localized in the session's map: %s\n", l.last_reason.c_str());
+  }
   if (r.report.evaluation) {
     const eval::EvalResult& e = *r.report.evaluation;
     std::printf(
@@ -135,6 +194,32 @@ void registerRunCommand(CLI::App& app) {
                   "observe long enough to drift by more than this (m, 1 sigma; report: degeneracy.max_drift_sigma_m)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  cmd->callback([args] { run(*args); });
+}
+
+void registerLocalizeCommand(CLI::App& app) {
+  auto args = std::make_shared<RunArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "localize", "Localize a bag in a saved session's map (OUT/session of a run): trajectory.tum in its frame");
+  cmd->add_option("bag", args->bag, "Input bag: ROS 1 .bag, ROS 2 .mcap, rosbag2 folder or .db3")
+      ->required()
+      ->check(CLI::ExistingPath);
+  cmd->add_option("-s,--session", args->session, "Session folder written by mmlio run (OUT/session)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("-c,--config", args->config, "Rig config YAML (default: built-in = config/hvi.yaml)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("-o,--out", args->out, "Output directory")->capture_default_str();
+  cmd->add_option("-m,--mode", args->mode, "Sensor mode: hvi | vi | hi (default: the config's)")
+      ->check(CLI::IsMember({"hvi", "vi", "hi"}));
+  cmd->add_option("--calib", args->calib, "Calibration YAML overriding extrinsics and clock offsets, or auto")
+      ->check(CLI::ExistingFile | CLI::IsMember({"auto"}));
+  cmd->add_option("--initial-pose", args->initial_pose,
+                  "Where the rig starts in the map, roughly: x,y,z,yaw_deg (default: found by place recognition)");
+  cmd->add_option("--gt", args->gt, "Ground-truth TUM trajectory in the map's frame: adds the evaluation")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--duration", args->duration_s, "Stop after this many seconds of the bag");
+  cmd->add_flag("--no-progress", args->no_progress, "No progress bar");
   cmd->callback([args] { run(*args); });
 }
 

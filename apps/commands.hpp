@@ -12,6 +12,7 @@ void registerInfoCommand(CLI::App& app);
 void registerSimulateCommand(CLI::App& app);
 void registerEvaluateCommand(CLI::App& app);
 void registerRunCommand(CLI::App& app);
+void registerLocalizeCommand(CLI::App& app);
 void registerBenchCommand(CLI::App& app);
 void registerCalibrateCommand(CLI::App& app);
 void registerConfigCommand(CLI::App& app);

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   mmlio::apps::registerInitCommand(app);
   mmlio::apps::registerSimulateCommand(app);
   mmlio::apps::registerRunCommand(app);
+  mmlio::apps::registerLocalizeCommand(app);
   mmlio::apps::registerEvaluateCommand(app);
   mmlio::apps::registerBenchCommand(app);
   mmlio::apps::registerCalibrateCommand(app);

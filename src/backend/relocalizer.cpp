@@ -28,7 +28,8 @@ Relocalizer::Relocalizer(const Session& session, RelocalizerConfig cfg) : sessio
 AlignmentCheck Relocalizer::verify(const std::vector<Eigen::Vector3d>& cloud_body, const Candidate& c) const {
   const int n = static_cast<int>(session_.keyframes.size());
   const int half = std::max(0, cfg_.submap_keyframes / 2);
-  const Eigen::Isometry3d T_keyframe_map = session_.keyframes[static_cast<std::size_t>(c.keyframe)].T_map_body.inverse();
+  const Eigen::Isometry3d T_keyframe_map =
+      session_.keyframes[static_cast<std::size_t>(c.keyframe)].T_map_body.inverse();
   std::vector<Eigen::Vector3d> submap;
   for (int i = std::max(0, c.keyframe - half); i <= std::min(n - 1, c.keyframe + half); ++i) {
     const SessionKeyframe& k = session_.keyframes[static_cast<std::size_t>(i)];
@@ -56,9 +57,8 @@ Relocalization Relocalizer::locate(const std::vector<Eigen::Vector3d>& cloud_bod
     }
     std::sort(near.begin(), near.end());
     for (std::size_t i = 0; i < near.size() && static_cast<int>(i) < cfg_.descriptor_candidates; ++i)
-      candidates.push_back({near[i].second, session_.keyframes[static_cast<std::size_t>(near[i].second)]
-                                                    .T_map_body.inverse() *
-                                                *hint});
+      candidates.push_back(
+          {near[i].second, session_.keyframes[static_cast<std::size_t>(near[i].second)].T_map_body.inverse() * *hint});
   } else {
     const ScanContext q = makeScanContext(cloud_body, cfg_.checks.descriptor);
     std::vector<std::pair<ScanContextMatch, int>> ranked;
@@ -74,8 +74,7 @@ Relocalization Relocalizer::locate(const std::vector<Eigen::Vector3d>& cloud_bod
     for (std::size_t i = 0; i < ranked.size() && static_cast<int>(i) < cfg_.descriptor_candidates; ++i)
       for (const double turn : {0.0, M_PI}) {
         Eigen::Isometry3d prior = Eigen::Isometry3d::Identity();
-        prior.linear() =
-            Eigen::AngleAxisd(ranked[i].first.yaw_rad + turn, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+        prior.linear() = Eigen::AngleAxisd(ranked[i].first.yaw_rad + turn, Eigen::Vector3d::UnitZ()).toRotationMatrix();
         candidates.push_back({ranked[i].second, prior});
       }
   }

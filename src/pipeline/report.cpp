@@ -43,7 +43,9 @@ void writeReports(const std::string& dir, RunReport& report, const Trajectory& t
                   const std::vector<Point>& map_world, const std::string& gt_path) {
   if (!gt_path.empty()) {
     try {
-      report.evaluation = eval::evaluate(io::readTum(gt_path), trajectory);
+      eval::EvalOptions options;
+      options.align = !report.localization.enabled;  // localized poses are in the map frame the truth is given in
+      report.evaluation = eval::evaluate(io::readTum(gt_path), trajectory, options);
     } catch (const std::exception& e) {
       log::warn("no evaluation against ", gt_path, ": ", e.what());
     }

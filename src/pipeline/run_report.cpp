@@ -162,6 +162,25 @@ Json toJson(const RunReport& r) {
   if (!r.online_calibration_first_pass.empty())
     rep["online_calibration_first_pass"] = refinedCalibrationJson(r.online_calibration_first_pass);
 
+  if (r.localization.enabled) {
+    const RunReport::Localization& l = r.localization;
+    Json lost = Json::array();
+    for (const auto& [from, to] : l.lost_s) lost.push_back({{"from_s", from}, {"to_s", to}});
+    rep["localization"] = {{"session", l.session},
+                           {"localized", l.localized},
+                           {"localized_at_end", l.localized_at_end},
+                           {"first_localized_s", l.first_localized_s},
+                           {"relocalizations", l.relocalizations},
+                           {"relocalization_attempts", l.relocalization_attempts},
+                           {"keyframes", l.keyframes},
+                           {"keyframes_fitting_the_map", l.keyframes_fitted},
+                           {"keyframes_degenerate", l.keyframes_degenerate},
+                           {"last_fitness_m", l.last_fitness_m},
+                           {"last_overlap", l.last_overlap},
+                           {"lost", lost},
+                           {"last_reason", l.last_reason}};
+  }
+
   Json features = Json::object();
   for (const auto& [name, t] : r.features) {
     const double n = static_cast<double>(std::max<std::size_t>(t.sweeps, 1));

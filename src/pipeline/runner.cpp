@@ -77,6 +77,11 @@ RunResult runPass(const RunOptions& options) {
 
   io::BagSource source(options.bag_path, config::bagSourceOptions(cfg, mode));
   System system(cfg, mode);
+  if (options.session) {
+    log::emit(log::Level::kInfo, "localizing in ", options.session_dir, ": ", options.session->keyframes.size(),
+              " keyframes, ", options.session->map.size(), " map points");
+    system.localizeIn(options.session, options.session_dir, options.initial_pose);
+  }
   const estimator::Odometry& odometry = system.odometry();
   ProgressBar progress("mmlio run", options.progress);
   Stopwatch wall;
@@ -241,7 +246,7 @@ void writeRefinedCalibration(const std::string& path, const config::RigConfig& c
 
 RunResult runBag(const RunOptions& options) {
   RunOptions pass = options;
-  const bool rerun = options.config.estimator.online_calibration.rerun && options.replays <= 1;
+  const bool rerun = options.config.estimator.online_calibration.rerun && options.replays <= 1 && !options.session;
   // Passes that may be run again keep their calibration fixed and only estimate it.
   if (rerun) pass.config.estimator.online_calibration.apply = false;
   RunResult result = runPass(pass);

@@ -9,6 +9,7 @@
 #include "mmlio/io/pcd_io.hpp"
 #include "mmlio/io/session_io.hpp"
 #include "mmlio/io/trajectory_writer.hpp"
+#include "mmlio/map/kd_tree.hpp"
 #include "mmlio/pipeline/odometry_setup.hpp"
 #include "mmlio/pipeline/report.hpp"
 #include "mmlio/version.hpp"
@@ -30,6 +31,13 @@ System::System(const config::RigConfig& cfg, const std::string& mode, SweepObser
   effective_config_yaml_ = config::toYaml(effective);  // once: every report (the node's too) carries it
 }
 
+void System::localizeIn(std::shared_ptr<const Session> session, const std::string& session_dir,
+                        const std::optional<Eigen::Isometry3d>& initial_pose) {
+  session_ = std::move(session);
+  session_dir_ = session_dir;
+  localizer_ = std::make_unique<backend::MapLocalizer>(*session_, backend::MapLocalizerConfig(), initial_pose);
+}
+
 void System::onSweep(estimator::SweepResult r) {
   if (r.status == estimator::SweepResult::Status::kInitializing) {
     ++sweeps_.initialising;
@@ -42,6 +50,12 @@ void System::onSweep(estimator::SweepResult r) {
   Stopwatch handoff;
   sampleCalibration(r.state.stamp_ns);
   odometry_poses_.push_back({r.state.stamp_ns, r.state.pose()});
+  if (localizer_ && r.keyframe && r.status == estimator::SweepResult::Status::kTracking) {
+    std::vector<Eigen::Vector3d> cloud;
+    cloud.reserve(r.points_body.size());
+    for (const Point& p : r.points_body) cloud.emplace_back(p.xyz.cast<double>());
+    localizer_->addKeyframe(r.state.stamp_ns, r.state.pose(), map::voxelCentroids(cloud, session_->cloud_voxel_m));
+  }
   degeneracy_.add(r);
   dynamic_.sweeps_judged += r.judged_for_movers;
   dynamic_.feature_points_rejected += r.dynamic_points;
@@ -128,12 +142,18 @@ Trajectory System::inputTime(Trajectory trajectory) const {
 }
 
 Trajectory System::trajectory() const {
+  if (localizer_) return inputTime(localizer_->inMap(odometry_poses_.trajectory()));
   return inputTime(mapping_.read([this](const backend::MappingBackend& b) { return b.corrected(odometry_poses_); }));
 }
 
 Stamp System::externalStamp(Stamp internal_ns) const { return online_.externalStamp(internal_ns); }
 
 Eigen::Isometry3d System::mapFromOdom() const {
+  if (localizer_) {
+    const std::optional<Eigen::Isometry3d> T =
+        localizer_->mapFromOdom(odometry_poses_.empty() ? 0 : odometry_poses_.back().stamp_ns);
+    return T ? *T : Eigen::Isometry3d::Identity();
+  }
   return mapping_.read([](const backend::MappingBackend& b) { return b.correction(); });
 }
 
@@ -189,7 +209,33 @@ RunReport System::report(Stamp stream_end_ns, const TrustLimits& limits) const {
   rusage usage{};
   if (getrusage(RUSAGE_SELF, &usage) == 0) r.memory.peak_rss_mb = usage.ru_maxrss / 1024.0;  // KiB on Linux
   judgeTrust(&r, stream_end_ns > 0 ? stream_end_ns : odometry().lastImuNs(), limits);
+  if (localizer_) reportLocalization(&r);
   return r;
+}
+
+void System::reportLocalization(RunReport* r) const {
+  const backend::LocalizationStatus& s = localizer_->status();
+  RunReport::Localization& l = r->localization;
+  const auto since_start = [this](Stamp t) { return t == 0 ? -1.0 : toSec(externalStamp(t) - first_imu_ns_); };
+  l.enabled = true;
+  l.session = session_dir_;
+  l.localized = s.first_localized_ns != 0;
+  l.localized_at_end = s.localized;
+  l.first_localized_s = since_start(s.first_localized_ns);
+  l.relocalizations = s.relocalizations;
+  l.relocalization_attempts = s.relocalization_attempts;
+  l.keyframes = s.keyframes;
+  l.keyframes_fitted = s.keyframes_fitted;
+  l.keyframes_degenerate = s.keyframes_degenerate;
+  l.last_fitness_m = s.last_fitness_m;
+  l.last_overlap = s.last_overlap;
+  l.last_reason = s.last_reason;
+  for (const auto& [from, to] : s.lost_spells) l.lost_s.emplace_back(since_start(from), since_start(to));
+  // A trajectory that never found itself in the map claims nothing there: not to be trusted.
+  if (!l.localized && r->untrusted.empty())
+    r->untrusted = "not localized in the session's map (" + l.last_reason + ")";
+  else if (!s.localized && r->untrusted.empty())
+    r->untrusted = "lost in the session's map at the end";
 }
 
 // Trust: the stream after initialisation is covered by poses, few of them were degraded, and the
@@ -229,6 +275,7 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
   Session session;
   Stopwatch assembly;
   mapping_.read([&](const backend::MappingBackend& b) {
+    if (localizer_) return;  // the map is the session's; the trajectory is in its frame
     trajectory = inputTime(b.corrected(odometry_poses_));
     map_points = b.map();
     session = b.session();
@@ -238,18 +285,24 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
   report.dynamic.map_assembly_s = assembly.elapsedMs() * 1e-3;
   report.dynamic.dynamic_map_points = dynamic_map.size();
 
+  if (localizer_) {
+    trajectory = this->trajectory();
+    map_points = session_->map;  // for the page's 3D view, in the frame of the trajectory
+  }
   io::writeTum(dir + "trajectory.tum", trajectory);
   io::writeTum(dir + "trajectory_odometry.tum", odometryTrajectory());  // before loop correction
   if (cfg_.output.write_kitti) {
     io::writeKitti(dir + "trajectory.kitti", trajectory);
     io::writeKittiTimes(dir + "times.txt", trajectory);
   }
-  io::writePcdBinary(dir + "map.pcd", map_points);
   RunReport::Outputs& out = report.outputs;
   out.trajectory = dir + "trajectory.tum";
   out.poses = trajectory.size();
-  out.map = dir + "map.pcd";
-  out.map_points = map_points.size();
+  if (!localizer_) {
+    io::writePcdBinary(dir + "map.pcd", map_points);
+    out.map = dir + "map.pcd";
+    out.map_points = map_points.size();
+  }
   out.map_voxel_m = cfg_.mapping.map_leaf_m;
   for (const auto& [lidar, points] : lidar_maps) {
     const std::string path = dir + "map_" + lidar + ".pcd";
@@ -260,7 +313,7 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
     io::writePcdBinary(dir + "map_dynamic.pcd", dynamic_map);
     out.dynamic_map = dir + "map_dynamic.pcd";
   }
-  if (cfg_.output.write_session) {
+  if (cfg_.output.write_session && !localizer_) {
     for (SessionKeyframe& k : session.keyframes) k.stamp_ns = online_.externalStamp(k.stamp_ns);
     session.map = map_points;
     out.session = dir + "session";

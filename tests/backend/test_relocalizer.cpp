@@ -71,8 +71,7 @@ TEST(Relocalizer, AHintOfAMetreAndTwentyDegreesIsEnough) {
   const Session session = roomASession();
   const Relocalizer relocalizer(session);
   const Eigen::Isometry3d truth = pose(0.5, 2.0, 1, 200 * kDeg);
-  const Relocalization r =
-      relocalizer.locate(sweep(testing::roomA(), truth, 98), pose(1.3, 2.0, 1, 220 * kDeg));
+  const Relocalization r = relocalizer.locate(sweep(testing::roomA(), truth, 98), pose(1.3, 2.0, 1, 220 * kDeg));
   ASSERT_TRUE(r.localized) << r.reason;
   EXPECT_LT((r.T_map_body.translation() - truth.translation()).norm(), 0.05) << r.reason;
   EXPECT_LT(angleDeg(r.T_map_body, truth), 1.0) << r.reason;

@@ -59,5 +59,16 @@ if [ "$(grep -vc "^#" "$tmp/run_rig/trajectory.tum" 2>/dev/null)" -lt 30 ] || ! 
   echo "FAIL: init's config and the preset give different trajectories"
   failed=1
 fi
+# localize: a missing session, a folder that is no session, a damaged one, a bad pose hint, another rig.
+expect 1 localize "$tmp/sim/office.bag"                                   # no --session
+expect 1 localize "$tmp/sim/office.bag" --session /nonexistent/session
+expect 1 localize "$tmp/sim/office.bag" --session "$tmp"                  # no session.yaml
+session="$tmp/run_hvi/session"
+expect 1 localize "$tmp/sim/office.bag" --session "$session" --initial-pose 1,2,three,0
+sed 's/name: velodyne/name: vlp16/' "$(dirname "$0")/../../config/hvi.yaml" > "$tmp/other_rig.yaml"
+expect 1 localize "$tmp/sim/office.bag" --session "$session" --config "$tmp/other_rig.yaml"
+cp -r "$session" "$tmp/damaged"
+truncate -s 100 "$tmp/damaged/keyframe_clouds.pcd"
+expect 1 localize "$tmp/sim/office.bag" --session "$tmp/damaged" --calib "$tmp/sim/office_truth.yaml"
 rm -rf "$tmp"
 exit $failed

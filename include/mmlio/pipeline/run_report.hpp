@@ -90,9 +90,24 @@ struct RunReport {
     std::string config_yaml;  // the effective config, extrinsics applied (also written as config_used.yaml)
   };
 
+  // `mmlio localize`: finding the rig in a saved session's map (report.json: localization).
+  struct Localization {
+    bool enabled = false;
+    std::string session;
+    bool localized = false;         // found itself at some point
+    bool localized_at_end = false;  // and was not lost at the end
+    double first_localized_s = -1;  // seconds from the first IMU sample; -1: never
+    int relocalizations = 0, relocalization_attempts = 0;
+    int keyframes = 0, keyframes_fitted = 0, keyframes_degenerate = 0;
+    double last_fitness_m = 0, last_overlap = 0;
+    std::vector<std::pair<double, double>> lost_s;  // spells, seconds from the first IMU sample (end -1: still)
+    std::string last_reason;
+  };
+
   std::string status = "complete";  // complete | degraded: ... | interrupted | incomplete: <error>
   std::string untrusted;            // empty, or why the outputs should not be trusted (exit code 3)
   Provenance run;
+  Localization localization;
   Input input;
   imu::ImuInitResult imu_init;
   Sweeps sweeps;

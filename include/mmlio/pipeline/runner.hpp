@@ -4,6 +4,8 @@
 // A feeder of pipeline::System: io::BagSource (time order) -> System -> outputs. A failure mid-bag
 // still writes what was computed (marked incomplete in the report) before the error is reported.
 #include <functional>
+#include <memory>
+#include <optional>
 #include <atomic>
 #include <string>
 
@@ -28,6 +30,12 @@ struct RunOptions {
   const std::atomic<bool>* stop = nullptr;  // set (e.g. by a signal handler): stop reading, write
                                             // what was computed, status "interrupted"
   TrustLimits trust;                        // beyond them RunResult::untrusted says why
+  // `mmlio localize`: a session folder to localize in instead of mapping (no loop closure, no
+  // second pass; the trajectory in the session's map frame), and optionally where the rig starts
+  // in it (T_map_body, roughly).
+  std::shared_ptr<const Session> session;  // io::readSession's
+  std::string session_dir;                 // where it was read from (the report names it)
+  std::optional<Eigen::Isometry3d> initial_pose;
   // A second pass with the calibration a first one refined (online_calibration.rerun): what the
   // first pass found (the report keeps it), and the outputs are left alone if it is interrupted.
   std::vector<RunReport::RefinedCalibration> first_pass_calibration;

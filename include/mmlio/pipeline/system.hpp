@@ -9,9 +9,12 @@
 // back end between two of its sweeps.
 #include <functional>
 #include <map>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "mmlio/backend/map_localizer.hpp"
 #include "mmlio/config/rig_config.hpp"
 #include "mmlio/core/pose_log.hpp"
 #include "mmlio/core/timer.hpp"
@@ -47,6 +50,11 @@ class System {
   /// scan.sensor names a configured LiDAR (others are ignored); its clock offset is applied here.
   void addScan(LidarScan scan) { online_.addScan(std::move(scan)); }
   void setTimingObserver(TimingObserver observer) { timing_observer_ = std::move(observer); }
+  /// Localize in a saved session instead of mapping anew (before the first sample): the trajectory
+  /// is then in the session's map frame, and neither a map nor a session is written.
+  /// initial_pose: T_map_body at the start, roughly, or none.
+  void localizeIn(std::shared_ptr<const Session> session, const std::string& session_dir,
+                  const std::optional<Eigen::Isometry3d>& initial_pose = std::nullopt);
   /// End of the stream: the sweeps still waiting for IMU are processed.
   void flush() { online_.flush(); }
   /// Waits for the back end and runs its final loop check. A failing back end is logged and
@@ -83,6 +91,7 @@ class System {
  private:
   void onSweep(estimator::SweepResult r);
   void judgeTrust(RunReport* report, Stamp stream_end_ns, const TrustLimits& limits) const;
+  void reportLocalization(RunReport* report) const;
   void sampleCalibration(Stamp stamp_ns);
   std::vector<RunReport::RefinedCalibration> refinedCalibration() const;
   /// Estimator stamps back in the input's time (they differ after a time-base jump).
@@ -107,6 +116,10 @@ class System {
   std::string backend_error_;
   bool finished_ = false;
   Stopwatch wall_;
+  // Localization: the session (kept here: the localizer refers to it) and the localizer.
+  std::shared_ptr<const Session> session_;
+  std::string session_dir_;
+  std::unique_ptr<backend::MapLocalizer> localizer_;
   OnlinePipeline online_;  // last: its callback uses the members above
 };
 

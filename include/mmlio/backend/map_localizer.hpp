@@ -1,0 +1,80 @@
+#pragma once
+// Localization in a saved session's map: the odometry runs as in any run (its own frame, "odom"),
+// and this keeps map <- odom. Until it has found itself, every few keyframes are relocalized (the
+// Relocalizer: no pose needed; a hint narrows it). Once found, every keyframe is aligned onto the
+// session map from where map <- odom predicts it; a well-conditioned, close alignment updates
+// map <- odom, a degenerate one (a corridor) leaves it as it was, and a run of keyframes that do
+// not fit the map (a part of the building not mapped, a wrong correction, a kidnapped robot) means
+// lost: relocalization again, and the spell is counted.
+#include <Eigen/Geometry>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "mmlio/backend/point_to_plane_icp.hpp"
+#include "mmlio/backend/relocalizer.hpp"
+#include "mmlio/core/session.hpp"
+#include "mmlio/core/types.hpp"
+
+namespace mmlio::backend {
+
+struct MapLocalizerConfig {
+  RelocalizerConfig relocalization;
+  int relocalize_every = 3;          // while not localized, keyframes between two attempts
+  double map_voxel_m = 0.1;          // the session map as the tracking's target
+  double track_max_corr_m = 0.5;     // tracking ICP's coarsest gate (the prediction is close)
+  double track_max_fitness_m = 0.05; // a keyframe fits the map: fitness at most this ...
+  double track_min_overlap = 0.6;    // ... and overlap at least this
+  // ... and the correction to the prediction at most this: map <- odom drifts by millimetres
+  // between keyframes, a larger change is a wrong alignment.
+  double track_max_correction_m = 0.3;
+  double track_max_correction_deg = 3.0;
+  double track_min_eigenvalue = 0.05;  // weaker (normalised, translation): it keeps map <- odom
+  int lost_after = 5;                  // this many keyframes in a row not fitting: lost
+};
+
+struct LocalizationStatus {
+  bool localized = false;       // now
+  Stamp first_localized_ns = 0; // 0: never
+  int relocalizations = 0;      // found again after being lost
+  int keyframes = 0, keyframes_fitted = 0, keyframes_degenerate = 0, relocalization_attempts = 0;
+  double last_fitness_m = 0, last_overlap = 0;
+  std::vector<std::pair<Stamp, Stamp>> lost_spells;  // [from, to); to = 0 while still lost
+  std::string last_reason;
+};
+
+class MapLocalizer {
+ public:
+  /// initial_pose: T_map_body of the first keyframe, roughly (a hint), or none. Keeps a reference
+  /// to the session (through its Relocalizer): it must outlive the MapLocalizer.
+  MapLocalizer(const Session& session, MapLocalizerConfig cfg = MapLocalizerConfig(),
+               std::optional<Eigen::Isometry3d> initial_pose = std::nullopt);
+
+  /// Every keyframe of the odometry, in time order: its pose in the odometry's frame and its
+  /// cloud (body frame, voxel centroids).
+  void addKeyframe(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body, const std::vector<Eigen::Vector3d>& cloud_body);
+
+  const LocalizationStatus& status() const { return status_; }
+  /// map <- odom in force at t: the latest correction at or before t, the first one before it
+  /// (the odometry before the first localization is in the same frame). Empty before any.
+  std::optional<Eigen::Isometry3d> mapFromOdom(Stamp t_ns) const;
+  /// The odometry's poses in the map frame (poses before the first localization too; none at all
+  /// when it never localized).
+  Trajectory inMap(const Trajectory& odometry) const;
+
+ private:
+  void relocalize(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body, const std::vector<Eigen::Vector3d>& cloud);
+  void track(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body, const std::vector<Eigen::Vector3d>& cloud);
+
+  MapLocalizerConfig cfg_;
+  std::optional<Eigen::Isometry3d> initial_pose_;
+  std::optional<Eigen::Isometry3d> T_map_odom_hint_;  // from the initial pose and the first keyframe
+  LocalizationStatus status_;
+  Relocalizer relocalizer_;
+  IcpTarget map_;
+  std::vector<std::pair<Stamp, Eigen::Isometry3d>> corrections_;  // map <- odom from the stamp on
+  int misses_ = 0;
+  int since_attempt_ = 0;
+};
+
+}  // namespace mmlio::backend

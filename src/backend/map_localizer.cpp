@@ -1,0 +1,111 @@
+#include "mmlio/backend/map_localizer.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "mmlio/core/log.hpp"
+
+namespace mmlio::backend {
+namespace {
+
+std::vector<Eigen::Vector3d> mapPoints(const Session& session, double voxel_m) {
+  std::vector<Eigen::Vector3d> pts;
+  pts.reserve(session.map.size());
+  for (const Point& p : session.map) pts.emplace_back(p.xyz.cast<double>());
+  return map::voxelCentroids(pts, voxel_m);
+}
+
+}  // namespace
+
+MapLocalizer::MapLocalizer(const Session& session, MapLocalizerConfig cfg, std::optional<Eigen::Isometry3d> initial_pose)
+    : cfg_(std::move(cfg)),
+      initial_pose_(std::move(initial_pose)),
+      relocalizer_(session, cfg_.relocalization),
+      map_(mapPoints(session, cfg_.map_voxel_m)) {}
+
+void MapLocalizer::addKeyframe(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body,
+                               const std::vector<Eigen::Vector3d>& cloud_body) {
+  ++status_.keyframes;
+  if (initial_pose_ && !T_map_odom_hint_) T_map_odom_hint_ = *initial_pose_ * T_odom_body.inverse();
+  if (status_.localized)
+    track(stamp_ns, T_odom_body, cloud_body);
+  else if (since_attempt_++ % std::max(1, cfg_.relocalize_every) == 0)
+    relocalize(stamp_ns, T_odom_body, cloud_body);
+}
+
+void MapLocalizer::relocalize(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body,
+                              const std::vector<Eigen::Vector3d>& cloud) {
+  ++status_.relocalization_attempts;
+  // A hint only for the first finding: once lost, the old map <- odom is what went wrong.
+  std::optional<Eigen::Isometry3d> hint;
+  if (T_map_odom_hint_ && status_.first_localized_ns == 0) hint = *T_map_odom_hint_ * T_odom_body;
+  const Relocalization r = relocalizer_.locate(cloud, hint);
+  status_.last_reason = r.reason;
+  if (!r.localized) {
+    log::debug("relocalization: ", r.reason);
+    return;
+  }
+  corrections_.emplace_back(stamp_ns, r.T_map_body * T_odom_body.inverse());
+  status_.localized = true;
+  status_.last_fitness_m = r.fitness_m;
+  status_.last_overlap = r.overlap;
+  misses_ = 0;
+  since_attempt_ = 0;
+  if (status_.first_localized_ns == 0) {
+    status_.first_localized_ns = stamp_ns;
+    log::emit(log::Level::kInfo, "localized in the session map: ", r.reason);
+  } else {
+    ++status_.relocalizations;
+    if (!status_.lost_spells.empty() && status_.lost_spells.back().second == 0) status_.lost_spells.back().second = stamp_ns;
+    log::emit(log::Level::kInfo, "localized again: ", r.reason);
+  }
+}
+
+void MapLocalizer::track(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body, const std::vector<Eigen::Vector3d>& cloud) {
+  const Eigen::Isometry3d& T_map_odom = corrections_.back().second;
+  const Eigen::Isometry3d predicted = T_map_odom * T_odom_body;
+  IcpConfig icp;
+  icp.max_corr_coarse_m = cfg_.track_max_corr_m;
+  icp.levels = 2;
+  icp.voxel_fine_m = cfg_.map_voxel_m;
+  const IcpResult r = alignPointToPlane(cloud, map_, predicted, icp);
+  const Eigen::Isometry3d correction = predicted.inverse() * r.T_target_source;
+  const double moved_deg = Eigen::AngleAxisd(correction.rotation()).angle() * 180.0 / M_PI;
+  const bool fits = r.converged && r.fitness_m <= cfg_.track_max_fitness_m && r.overlap >= cfg_.track_min_overlap &&
+                    correction.translation().norm() <= cfg_.track_max_correction_m &&
+                    moved_deg <= cfg_.track_max_correction_deg;
+  status_.last_fitness_m = r.fitness_m;
+  status_.last_overlap = r.overlap;
+  if (fits) {
+    misses_ = 0;
+    ++status_.keyframes_fitted;
+    if (r.min_translation_eigenvalue >= cfg_.track_min_eigenvalue)
+      corrections_.emplace_back(stamp_ns, r.T_target_source * T_odom_body.inverse());
+    else
+      ++status_.keyframes_degenerate;
+    return;
+  }
+  if (++misses_ < cfg_.lost_after) return;
+  status_.localized = false;
+  status_.lost_spells.emplace_back(stamp_ns, 0);
+  since_attempt_ = 0;
+  log::warn("lost in the session map: ", misses_, " keyframes in a row do not fit it (last fitness ", r.fitness_m,
+            " m, overlap ", r.overlap, ")");
+}
+
+std::optional<Eigen::Isometry3d> MapLocalizer::mapFromOdom(Stamp t_ns) const {
+  if (corrections_.empty()) return std::nullopt;
+  const auto after = std::upper_bound(corrections_.begin(), corrections_.end(), t_ns,
+                                      [](Stamp t, const auto& c) { return t < c.first; });
+  return after == corrections_.begin() ? corrections_.front().second : std::prev(after)->second;
+}
+
+Trajectory MapLocalizer::inMap(const Trajectory& odometry) const {
+  Trajectory out;
+  if (corrections_.empty()) return out;
+  out.reserve(odometry.size());
+  for (const StampedPose& p : odometry) out.push_back({p.stamp_ns, *mapFromOdom(p.stamp_ns) * p.T_world_body});
+  return out;
+}
+
+}  // namespace mmlio::backend

@@ -1,0 +1,139 @@
+// `mmlio localize`: a walk carried by hand through the office, localized in the session a robot's
+// run through it left, with no initial pose: found within seconds, then tracked in the session's
+// map frame to centimetres without any alignment of its poses; a bag from another building is
+// never localized and says so.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "mmlio/io/session_io.hpp"
+#include "mmlio/pipeline/runner.hpp"
+#include "mmlio/sim/simulator.hpp"
+#include "sim_feed.hpp"
+
+namespace mmlio {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// The ground truth's position at t, interpolated (the simulator samples it at the IMU's rate).
+std::optional<Eigen::Vector3d> truthAt(const Trajectory& gt, Stamp t) {
+  const auto after = std::lower_bound(gt.begin(), gt.end(), t, [](const StampedPose& p, Stamp s) {
+    return p.stamp_ns < s;
+  });
+  if (after == gt.begin() || after == gt.end()) return std::nullopt;
+  const auto before = std::prev(after);
+  const double w = static_cast<double>(t - before->stamp_ns) / static_cast<double>(after->stamp_ns - before->stamp_ns);
+  return (1 - w) * before->T_world_body.translation() + w * after->T_world_body.translation();
+}
+
+struct Folder {
+  fs::path path;
+  explicit Folder(const std::string& name) : path(fs::temp_directory_path() / name) { fs::remove_all(path); }
+  ~Folder() { fs::remove_all(path); }
+  std::string operator/(const std::string& leaf) const { return (path / leaf).string(); }
+};
+
+class Localize : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    sim::SimOptions so;
+    so.scenario = "office";
+    so.seed = 1;
+    mapping_sim_ = std::make_unique<sim::Simulator>(so);
+    fs::create_directories(dir_.path);
+    testing::writeSimBag(*mapping_sim_, dir_ / "map.bag");
+    pipeline::RunOptions options;
+    options.config = testing::simRigConfig(*mapping_sim_);
+    options.bag_path = dir_ / "map.bag";
+    options.out_dir = dir_ / "map_out";
+    options.progress = false;
+    mapping_ = std::make_unique<pipeline::RunResult>(pipeline::runBag(options));
+  }
+  static void TearDownTestSuite() {
+    mapping_.reset();
+    mapping_sim_.reset();
+  }
+  /// map <- world, fixed once from the mapping run: its first pose (at rest) against the truth.
+  static Eigen::Isometry3d mapFromWorld() {
+    const StampedPose& first = mapping_->trajectory.front();
+    const Trajectory& gt = mapping_sim_->groundTruth();
+    const auto at = std::lower_bound(gt.begin(), gt.end(), first.stamp_ns, [](const StampedPose& p, Stamp s) {
+      return p.stamp_ns < s;
+    });
+    return first.T_world_body * at->T_world_body.inverse();
+  }
+
+  static inline Folder dir_{"mmlio_test_localize"};
+  static inline std::unique_ptr<sim::Simulator> mapping_sim_;
+  static inline std::unique_ptr<pipeline::RunResult> mapping_;
+};
+
+TEST_F(Localize, AHandHeldWalkFindsItselfInARobotsMapAndTracksToCentimetres) {
+  sim::SimOptions so;
+  so.scenario = "office";
+  so.seed = 2;
+  so.handheld = true;
+  so.duration_s = 20;
+  const sim::Simulator sim(so);
+  testing::writeSimBag(sim, dir_ / "walk.bag");
+  pipeline::RunOptions options;
+  options.config = testing::simRigConfig(sim);
+  options.config.mapping.loop_enabled = false;
+  options.bag_path = dir_ / "walk.bag";
+  options.out_dir = dir_ / "walk_out";
+  options.session_dir = dir_ / "map_out/session";
+  options.session = std::make_shared<const Session>(io::readSession(options.session_dir));
+  options.progress = false;
+  const pipeline::RunResult r = pipeline::runBag(options);
+  const pipeline::RunReport::Localization& l = r.report.localization;
+  ASSERT_TRUE(l.enabled);
+  ASSERT_TRUE(l.localized) << l.last_reason;
+  EXPECT_TRUE(l.localized_at_end);
+  EXPECT_LT(l.first_localized_s, 3.0);
+  EXPECT_TRUE(l.lost_s.empty());
+  EXPECT_TRUE(r.untrusted.empty()) << r.untrusted;
+  EXPECT_FALSE(fs::exists(dir_ / "walk_out/map.pcd"));  // the map is the session's
+  // In the map frame as it is: no alignment of the localized poses.
+  const Eigen::Isometry3d T_map_world = mapFromWorld();
+  double sum_sq = 0, worst = 0;
+  int n = 0;
+  for (const StampedPose& p : r.trajectory) {
+    const std::optional<Eigen::Vector3d> truth = truthAt(sim.groundTruth(), p.stamp_ns);
+    if (!truth) continue;
+    const double e = (p.T_world_body.translation() - T_map_world * *truth).norm();
+    sum_sq += e * e;
+    worst = std::max(worst, e);
+    ++n;
+  }
+  ASSERT_GT(n, 100);
+  const double ate = std::sqrt(sum_sq / n);
+  std::printf("localized %.1f s after the start; %d poses: ATE %.2f cm without alignment, worst %.2f cm\n",
+              l.first_localized_s, n, 100 * ate, 100 * worst);
+  EXPECT_LT(ate, 0.02);
+  EXPECT_LT(worst, 0.05);
+}
+
+TEST_F(Localize, ABagFromAnotherBuildingIsNeverLocalizedAndSaysSo) {
+  sim::SimOptions so;
+  so.scenario = "hall";
+  so.duration_s = 12;
+  const sim::Simulator sim(so);
+  testing::writeSimBag(sim, dir_ / "hall.bag");
+  pipeline::RunOptions options;
+  options.config = testing::simRigConfig(sim);
+  options.config.mapping.loop_enabled = false;
+  options.bag_path = dir_ / "hall.bag";
+  options.out_dir = dir_ / "hall_out";
+  options.session_dir = dir_ / "map_out/session";
+  options.session = std::make_shared<const Session>(io::readSession(options.session_dir));
+  options.progress = false;
+  const pipeline::RunResult r = pipeline::runBag(options);
+  EXPECT_FALSE(r.report.localization.localized) << r.report.localization.last_reason;
+  EXPECT_GT(r.report.localization.relocalization_attempts, 0);
+  EXPECT_NE(r.untrusted.find("not localized"), std::string::npos) << r.untrusted;
+  EXPECT_TRUE(r.trajectory.empty());  // no pose claims to be in the map
+}
+
+}  // namespace
+}  // namespace mmlio
