@@ -17,7 +17,8 @@ std::vector<Eigen::Vector3d> mapPoints(const Session& session, double voxel_m) {
 
 }  // namespace
 
-MapLocalizer::MapLocalizer(const Session& session, MapLocalizerConfig cfg, std::optional<Eigen::Isometry3d> initial_pose)
+MapLocalizer::MapLocalizer(const Session& session, MapLocalizerConfig cfg,
+                           std::optional<Eigen::Isometry3d> initial_pose)
     : cfg_(std::move(cfg)),
       initial_pose_(std::move(initial_pose)),
       relocalizer_(session, cfg_.relocalization),
@@ -27,6 +28,8 @@ void MapLocalizer::addKeyframe(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_b
                                const std::vector<Eigen::Vector3d>& cloud_body) {
   ++status_.keyframes;
   if (initial_pose_ && !T_map_odom_hint_) T_map_odom_hint_ = *initial_pose_ * T_odom_body.inverse();
+  recent_.push_back({T_odom_body, cloud_body});
+  while (static_cast<int>(recent_.size()) > std::max(1, cfg_.relocalize_keyframes)) recent_.pop_front();
   if (status_.localized)
     track(stamp_ns, T_odom_body, cloud_body);
   else if (since_attempt_++ % std::max(1, cfg_.relocalize_every) == 0)
@@ -39,7 +42,14 @@ void MapLocalizer::relocalize(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_bo
   // A hint only for the first finding: once lost, the old map <- odom is what went wrong.
   std::optional<Eigen::Isometry3d> hint;
   if (T_map_odom_hint_ && status_.first_localized_ns == 0) hint = *T_map_odom_hint_ * T_odom_body;
-  const Relocalization r = relocalizer_.locate(cloud, hint);
+  std::vector<Eigen::Vector3d> walked;  // the latest keyframes in this one's frame
+  const Eigen::Isometry3d T_body_odom = T_odom_body.inverse();
+  for (const Recent& k : recent_) {
+    const Eigen::Isometry3d T_body_k = T_body_odom * k.T_odom_body;
+    for (const Eigen::Vector3d& p : k.cloud_body) walked.push_back(T_body_k * p);
+  }
+  const Relocalization r =
+      relocalizer_.locate(cloud, map::voxelCentroids(walked, cfg_.relocalization.checks.submap_voxel_m), hint);
   status_.last_reason = r.reason;
   if (!r.localized) {
     log::debug("relocalization: ", r.reason);
@@ -56,12 +66,14 @@ void MapLocalizer::relocalize(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_bo
     log::emit(log::Level::kInfo, "localized in the session map: ", r.reason);
   } else {
     ++status_.relocalizations;
-    if (!status_.lost_spells.empty() && status_.lost_spells.back().second == 0) status_.lost_spells.back().second = stamp_ns;
+    if (!status_.lost_spells.empty() && status_.lost_spells.back().second == 0)
+      status_.lost_spells.back().second = stamp_ns;
     log::emit(log::Level::kInfo, "localized again: ", r.reason);
   }
 }
 
-void MapLocalizer::track(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body, const std::vector<Eigen::Vector3d>& cloud) {
+void MapLocalizer::track(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body,
+                         const std::vector<Eigen::Vector3d>& cloud) {
   const Eigen::Isometry3d& T_map_odom = corrections_.back().second;
   const Eigen::Isometry3d predicted = T_map_odom * T_odom_body;
   IcpConfig icp;

@@ -41,6 +41,7 @@ AlignmentCheck Relocalizer::verify(const std::vector<Eigen::Vector3d>& cloud_bod
 }
 
 Relocalization Relocalizer::locate(const std::vector<Eigen::Vector3d>& cloud_body,
+                                   const std::vector<Eigen::Vector3d>& verify_body,
                                    const std::optional<Eigen::Isometry3d>& hint) const {
   Relocalization out;
   if (cloud_body.empty()) {
@@ -92,7 +93,7 @@ Relocalization Relocalizer::locate(const std::vector<Eigen::Vector3d>& cloud_bod
   std::string last_reason;
   for (const Candidate& c : candidates) {
     ++out.candidates_tried;
-    const AlignmentCheck v = verify(cloud_body, c);
+    const AlignmentCheck v = verify(verify_body, c);
     if (!v.accepted) {
       last_reason = "keyframe " + std::to_string(c.keyframe) + ": " + v.reason;
       continue;

@@ -83,7 +83,8 @@ void System::onSweep(estimator::SweepResult r) {
   sample.keyframe = r.keyframe;
   // The back end works on the sweep on its own thread: it takes it, or a copy if an observer (the
   // live node publishing the sweep's points) still needs it.
-  if (!finished_) {
+  // Localizing, the map is the session's: nothing is mapped (memory stays that of the odometry).
+  if (!finished_ && !localizer_) {
     if (observer_)
       mapping_.addSweep(r);
     else

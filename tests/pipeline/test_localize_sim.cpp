@@ -18,9 +18,8 @@ namespace fs = std::filesystem;
 
 /// The ground truth's position at t, interpolated (the simulator samples it at the IMU's rate).
 std::optional<Eigen::Vector3d> truthAt(const Trajectory& gt, Stamp t) {
-  const auto after = std::lower_bound(gt.begin(), gt.end(), t, [](const StampedPose& p, Stamp s) {
-    return p.stamp_ns < s;
-  });
+  const auto after =
+      std::lower_bound(gt.begin(), gt.end(), t, [](const StampedPose& p, Stamp s) { return p.stamp_ns < s; });
   if (after == gt.begin() || after == gt.end()) return std::nullopt;
   const auto before = std::prev(after);
   const double w = static_cast<double>(t - before->stamp_ns) / static_cast<double>(after->stamp_ns - before->stamp_ns);
@@ -58,9 +57,8 @@ class Localize : public ::testing::Test {
   static Eigen::Isometry3d mapFromWorld() {
     const StampedPose& first = mapping_->trajectory.front();
     const Trajectory& gt = mapping_sim_->groundTruth();
-    const auto at = std::lower_bound(gt.begin(), gt.end(), first.stamp_ns, [](const StampedPose& p, Stamp s) {
-      return p.stamp_ns < s;
-    });
+    const auto at = std::lower_bound(gt.begin(), gt.end(), first.stamp_ns,
+                                     [](const StampedPose& p, Stamp s) { return p.stamp_ns < s; });
     return first.T_world_body * at->T_world_body.inverse();
   }
 

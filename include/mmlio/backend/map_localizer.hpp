@@ -7,6 +7,7 @@
 // not fit the map (a part of the building not mapped, a wrong correction, a kidnapped robot) means
 // lost: relocalization again, and the spell is counted.
 #include <Eigen/Geometry>
+#include <deque>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -20,11 +21,12 @@ namespace mmlio::backend {
 
 struct MapLocalizerConfig {
   RelocalizerConfig relocalization;
-  int relocalize_every = 3;          // while not localized, keyframes between two attempts
-  double map_voxel_m = 0.1;          // the session map as the tracking's target
-  double track_max_corr_m = 0.5;     // tracking ICP's coarsest gate (the prediction is close)
-  double track_max_fitness_m = 0.05; // a keyframe fits the map: fitness at most this ...
-  double track_min_overlap = 0.6;    // ... and overlap at least this
+  int relocalize_every = 3;           // while not localized, keyframes between two attempts
+  int relocalize_keyframes = 5;       // a relocalization is verified with this many latest keyframes' clouds
+  double map_voxel_m = 0.1;           // the session map as the tracking's target
+  double track_max_corr_m = 0.5;      // tracking ICP's coarsest gate (the prediction is close)
+  double track_max_fitness_m = 0.05;  // a keyframe fits the map: fitness at most this ...
+  double track_min_overlap = 0.6;     // ... and overlap at least this
   // ... and the correction to the prediction at most this: map <- odom drifts by millimetres
   // between keyframes, a larger change is a wrong alignment.
   double track_max_correction_m = 0.3;
@@ -34,9 +36,9 @@ struct MapLocalizerConfig {
 };
 
 struct LocalizationStatus {
-  bool localized = false;       // now
-  Stamp first_localized_ns = 0; // 0: never
-  int relocalizations = 0;      // found again after being lost
+  bool localized = false;        // now
+  Stamp first_localized_ns = 0;  // 0: never
+  int relocalizations = 0;       // found again after being lost
   int keyframes = 0, keyframes_fitted = 0, keyframes_degenerate = 0, relocalization_attempts = 0;
   double last_fitness_m = 0, last_overlap = 0;
   std::vector<std::pair<Stamp, Stamp>> lost_spells;  // [from, to); to = 0 while still lost
@@ -52,7 +54,8 @@ class MapLocalizer {
 
   /// Every keyframe of the odometry, in time order: its pose in the odometry's frame and its
   /// cloud (body frame, voxel centroids).
-  void addKeyframe(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body, const std::vector<Eigen::Vector3d>& cloud_body);
+  void addKeyframe(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body,
+                   const std::vector<Eigen::Vector3d>& cloud_body);
 
   const LocalizationStatus& status() const { return status_; }
   /// map <- odom in force at t: the latest correction at or before t, the first one before it
@@ -73,6 +76,11 @@ class MapLocalizer {
   Relocalizer relocalizer_;
   IcpTarget map_;
   std::vector<std::pair<Stamp, Eigen::Isometry3d>> corrections_;  // map <- odom from the stamp on
+  struct Recent {
+    Eigen::Isometry3d T_odom_body;
+    std::vector<Eigen::Vector3d> cloud_body;
+  };
+  std::deque<Recent> recent_;  // the latest keyframes, for relocalization
   int misses_ = 0;
   int since_attempt_ = 0;
 };

@@ -17,10 +17,14 @@
 namespace mmlio::backend {
 
 /// A loop's checks, but a sweep must explain three quarters of its points in the map (a loop's
-/// keyframe one half): from another room of like shape 0.68 fitted.
+/// keyframe one half): from another room of like shape 0.68 fitted. The weakest direction may be
+/// four times weaker than a loop's: a corridor's end walls and doors fix the sweep along it (the
+/// uniqueness restarts still refuse a door period's twin), and a wrong finding is caught by the
+/// tracking that follows, where a wrong loop would bend the pose graph for good.
 inline LoopCloser::Config relocalizationChecks() {
   LoopCloser::Config c;
   c.min_overlap = 0.75;
+  c.min_translation_eigenvalue = 0.02;
   return c;
 }
 
@@ -58,6 +62,14 @@ class Relocalizer {
   /// centroids at the session's cloud_voxel_m. `hint`: T_map_body roughly (within hint_radius_m and
   /// 30 deg), or none.
   Relocalization locate(const std::vector<Eigen::Vector3d>& cloud_body,
+                        const std::optional<Eigen::Isometry3d>& hint = std::nullopt) const {
+    return locate(cloud_body, cloud_body, hint);
+  }
+  /// The same, with the candidates found by the sweep's descriptor (`cloud_body`, as keyframes'
+  /// descriptors are made) but verified with `verify_body`: the sweep and the ones before it, in
+  /// its body frame. One sweep down a corridor does not fix where along it the rig is; the last few
+  /// metres walked, with a door or a corner, can.
+  Relocalization locate(const std::vector<Eigen::Vector3d>& cloud_body, const std::vector<Eigen::Vector3d>& verify_body,
                         const std::optional<Eigen::Isometry3d>& hint = std::nullopt) const;
 
  private:
