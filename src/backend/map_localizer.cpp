@@ -41,7 +41,7 @@ void MapLocalizer::relocalize(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_bo
   ++status_.relocalization_attempts;
   // A hint only for the first finding: once lost, the old map <- odom is what went wrong.
   std::optional<Eigen::Isometry3d> hint;
-  if (T_map_odom_hint_ && status_.first_localized_ns == 0) hint = *T_map_odom_hint_ * T_odom_body;
+  if (T_map_odom_hint_ && !status_.first_localized_ns) hint = *T_map_odom_hint_ * T_odom_body;
   std::vector<Eigen::Vector3d> walked;  // the latest keyframes in this one's frame
   const Eigen::Isometry3d T_body_odom = T_odom_body.inverse();
   for (const Recent& k : recent_) {
@@ -61,7 +61,7 @@ void MapLocalizer::relocalize(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_bo
   status_.last_overlap = r.overlap;
   misses_ = 0;
   since_attempt_ = 0;
-  if (status_.first_localized_ns == 0) {
+  if (!status_.first_localized_ns) {
     status_.first_localized_ns = stamp_ns;
     log::emit(log::Level::kInfo, "localized in the session map: ", r.reason);
   } else {

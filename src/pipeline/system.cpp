@@ -220,9 +220,9 @@ void System::reportLocalization(RunReport* r) const {
   const auto since_start = [this](Stamp t) { return t == 0 ? -1.0 : toSec(externalStamp(t) - first_imu_ns_); };
   l.enabled = true;
   l.session = session_dir_;
-  l.localized = s.first_localized_ns != 0;
+  l.localized = s.first_localized_ns.has_value();
   l.localized_at_end = s.localized;
-  l.first_localized_s = since_start(s.first_localized_ns);
+  l.first_localized_s = s.first_localized_ns ? since_start(*s.first_localized_ns) : -1.0;
   l.relocalizations = s.relocalizations;
   l.relocalization_attempts = s.relocalization_attempts;
   l.keyframes = s.keyframes;

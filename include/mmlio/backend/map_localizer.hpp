@@ -36,9 +36,9 @@ struct MapLocalizerConfig {
 };
 
 struct LocalizationStatus {
-  bool localized = false;        // now
-  Stamp first_localized_ns = 0;  // 0: never
-  int relocalizations = 0;       // found again after being lost
+  bool localized = false;                   // now
+  std::optional<Stamp> first_localized_ns;  // none: never
+  int relocalizations = 0;                  // found again after being lost
   int keyframes = 0, keyframes_fitted = 0, keyframes_degenerate = 0, relocalization_attempts = 0;
   double last_fitness_m = 0, last_overlap = 0;
   std::vector<std::pair<Stamp, Stamp>> lost_spells;  // [from, to); to = 0 while still lost
