@@ -1,11 +1,14 @@
 #include "live_feeder.hpp"
 
+#include "mmlio/io/session_io.hpp"
+
 #include "mmlio/config/calibration_source.hpp"
 #include "mmlio/config/source_options.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
 #include "mmlio/core/so3.hpp"
 #include "mmlio/io/cdr_messages.hpp"
+#include "mmlio/io/session_io.hpp"
 #include "ros_messages.hpp"
 
 namespace mmlio::live {
@@ -44,6 +47,8 @@ LiveFeeder::LiveFeeder(const config::RigConfig& cfg, FeederOptions options, Outl
           {static_cast<std::size_t>(options_.max_queued_imu), static_cast<std::size_t>(options_.max_queued_scans), 8}),
       imu_gate_(cfg.imu.topic, cfg.imu.acc_unit),
       system_(cfg, options_.mode, [this](const estimator::SweepResult& r) { onSweep(r); }) {
+  if (!options_.session_dir.empty())
+    system_.localizeIn(std::make_shared<const Session>(io::readSession(options_.session_dir)), options_.session_dir);
   lidars_ = config::activeLidars(cfg, system_.mode());
   for (const config::LidarConfig* l : lidars_) {
     decode_.push_back(config::decodeOptions(*l));

@@ -41,6 +41,7 @@ struct FeederOptions {
   double point_sigma_m = 0.03;        // LiDAR point noise behind the pose covariance
   int max_queued_scans = 10;          // LiDAR messages waiting for the processing thread
   int max_queued_imu = 4000;          // IMU messages waiting (20 s at 200 Hz)
+  std::string session_dir;            // localize in this saved session (docs/session.md); empty = map anew
 };
 
 /// The rig config at `config_path` (built-in defaults if empty) with its `calibration:`, or the

@@ -46,6 +46,7 @@ NodeParams readParams(const ros::NodeHandle& pnh) {
   pnh.param("mode", f.mode, f.mode);
   pnh.param("calib", p.calib, p.calib);
   pnh.param("out_dir", f.out_dir, f.out_dir);
+  pnh.param("session", f.session_dir, f.session_dir);
   pnh.param("map_frame", f.map_frame, f.map_frame);
   pnh.param("odom_frame", f.odom_frame, f.odom_frame);
   pnh.param("body_frame", f.body_frame, f.body_frame);

@@ -101,4 +101,31 @@ check(node_ate <= 1.05 * run_ate + 1e-4, f"node ATE {100 * node_ate:.2f} cm with
 check(report["input"]["queue_dropped"]["imu"] == 0 and report["input"]["queue_dropped"]["scans"] == 0, "no message dropped")
 finish()
 PY
+
+# Localizing live in the session `mmlio run` left (the same bag): the node finds itself at once, its
+# poses are the session's map frame's, and its report says so.
+stdbuf -oL -eL "$NODE" __name:=mmlio_loc _config:="$CONFIG_DIR/hvi.yaml" _calib:="$truth" _out_dir:="$work/loc" \
+  _session:="$work/run/session" > "$work/loc_node.log" 2>&1 &
+loc_pid=$!
+pids+=($loc_pid)
+wait_for 30 rostopic info /mmlio_loc/odometry || fail "the localizing node never advertised its odometry"
+rosbag play -q --wait-for-subscribers "$bag" > "$work/play_loc.log" 2>&1 || fail "rosbag play (localize)"
+sleep 3
+stop_node "$loc_pid"
+python3 - "$work" << 'PY' || fail "localization checks above"
+import json, math, sys
+from live_checks import check, finish, read_tum
+
+work = sys.argv[1]
+loc = json.load(open(f"{work}/loc/report.json")).get("localization", {})
+check(loc.get("localized") is True, f"the node localized in the session ({loc.get('last_reason')})")
+check(0 <= loc.get("first_localized_s", -1) < 3, f"within 3 s of its first message ({loc.get('first_localized_s')} s)")
+node = {r[0]: [float(x) for x in r[1:4]] for r in read_tum(f"{work}/loc/trajectory.tum")}
+mapped = {r[0]: [float(x) for x in r[1:4]] for r in read_tum(f"{work}/run/trajectory.tum")}
+common = [t for t in node if t in mapped]
+worst = max((math.dist(node[t], mapped[t]) for t in common), default=float("inf"))
+check(len(common) >= 0.9 * len(mapped), f"a localized pose for every mapped one ({len(common)} of {len(mapped)})")
+check(worst < 0.05, f"in the session's map frame: within {100 * worst:.2f} cm of the mapping run's poses")
+finish()
+PY
 echo "PASS"

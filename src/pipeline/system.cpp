@@ -163,6 +163,7 @@ std::size_t System::loops() const {
 }
 
 std::vector<Point> System::map() const {
+  if (localizer_) return session_->map;
   return mapping_.read([](const backend::MappingBackend& b) { return b.map(); });
 }
 
