@@ -28,6 +28,7 @@ config::RigConfig loadRigConfig(const std::string& config_path, const std::strin
 void checkOptions(const FeederOptions& o) {
   if (o.max_queued_scans < 1 || o.max_queued_imu < 1) throw Error("max_queued_scans and max_queued_imu must be >= 1");
   if (!(o.point_sigma_m > 0.0)) throw Error("point_sigma_m must be > 0");
+  if (o.autosave_period_s < 0) throw Error("autosave period must be >= 0 s (0: never)");
   if (o.map_frame.empty() || o.odom_frame.empty() || o.body_frame.empty() || o.map_frame == o.odom_frame ||
       o.odom_frame == o.body_frame)
     throw Error("map_frame, odom_frame and body_frame must be distinct, non-empty frame names");
@@ -141,6 +142,11 @@ void LiveFeeder::process(const Message& m) {
     m.save->set_value(writeOutputs());
     return;
   }
+  if (save_due_) {
+    save_due_ = false;
+    const std::string error = writeOutputs();
+    if (!error.empty()) log::error("autosave: ", error);
+  }
   if (m.imu) return addImu(*m.imu);
   if (m.cloud) return addCloud(m.lidar, *m.cloud);
   if (m.livox) return addScan(io::decodeLivox(*m.livox, decode_[m.lidar]));
@@ -205,6 +211,12 @@ void LiveFeeder::onSweep(const estimator::SweepResult& r) {
   }
   if (outlet_.wantsScan()) outlet_.scan(toPointCloud2(r.points_body, T_odom_body, stamp_ns, options_.odom_frame));
   if (!r.keyframe) return;
+  if (last_save_ns_ == 0) last_save_ns_ = r.state.stamp_ns;
+  if (!options_.out_dir.empty() && options_.autosave_period_s > 0 &&
+      toSec(r.state.stamp_ns - last_save_ns_) >= options_.autosave_period_s) {
+    save_due_ = true;
+    last_save_ns_ = r.state.stamp_ns;
+  }
   // Keyframes: the corrected path (loops move it), and now and then the global map.
   if (outlet_.wantsPath()) outlet_.path(toPath(system_.trajectory(), options_.map_frame));
   const double since_map_s = toSec(r.state.stamp_ns - last_map_ns_);

@@ -42,6 +42,9 @@ struct FeederOptions {
   int max_queued_scans = 10;          // LiDAR messages waiting for the processing thread
   int max_queued_imu = 4000;          // IMU messages waiting (20 s at 200 Hz)
   std::string session_dir;            // localize in this saved session (docs/session.md); empty = map anew
+  // With out_dir: every this many seconds of sensor time the outputs (session included) are written,
+  // each file and the session folder atomically, so a crash loses at most this much (0: never).
+  double autosave_period_s = 300.0;
 };
 
 /// The rig config at `config_path` (built-in defaults if empty) with its `calibration:`, or the
@@ -141,7 +144,8 @@ class LiveFeeder {
   pipeline::System system_;
   std::size_t degraded_ = 0;
   Eigen::Quaterniond last_q_ = Eigen::Quaterniond::Identity();
-  Stamp last_stamp_ns_pose_ = 0, last_map_ns_ = 0;
+  Stamp last_stamp_ns_pose_ = 0, last_map_ns_ = 0, last_save_ns_ = 0;
+  bool save_due_ = false;  // an autosave, done between two messages (not inside the System's callback)
   Eigen::Isometry3d T_map_odom_ = Eigen::Isometry3d::Identity();
   bool map_odom_known_ = false;
   bool finished_ = false;

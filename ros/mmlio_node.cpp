@@ -25,7 +25,7 @@ namespace {
 constexpr const char* kUsage =
     "usage: mmlio_node [_config:=RIG.yaml] [_mode:=hvi|vi|hi] [_calib:=CALIB.yaml] [_out_dir:=DIR]\n"
     "                  [_map_frame:=map] [_odom_frame:=odom] [_body_frame:=imu] [_publish_tf:=true]\n"
-    "                  [_map_publish_period_s:=5] [_point_sigma_m:=0.03]\n"
+    "                  [_map_publish_period_s:=5] [_point_sigma_m:=0.03] [_session:=DIR] [_autosave_period_s:=300]\n"
     "                  [_max_queued_scans:=10] [_max_queued_imu:=4000] [ROS remappings]\n"
     "Live multi-LiDAR-inertial odometry and mapping: subscribes to the IMU and LiDAR topics of the rig\n"
     "config; publishes ~odometry (nav_msgs/Odometry), ~path (nav_msgs/Path, corrected by loops), tf\n"
@@ -47,6 +47,7 @@ NodeParams readParams(const ros::NodeHandle& pnh) {
   pnh.param("calib", p.calib, p.calib);
   pnh.param("out_dir", f.out_dir, f.out_dir);
   pnh.param("session", f.session_dir, f.session_dir);
+  pnh.param("autosave_period_s", f.autosave_period_s, f.autosave_period_s);
   pnh.param("map_frame", f.map_frame, f.map_frame);
   pnh.param("odom_frame", f.odom_frame, f.odom_frame);
   pnh.param("body_frame", f.body_frame, f.body_frame);

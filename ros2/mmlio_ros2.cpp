@@ -198,6 +198,9 @@ int main(int argc, char** argv) {
   app.add_option("--calib", o.calib, "Calibration YAML from `mmlio calibrate`, overriding the config's extrinsics")
       ->check(CLI::ExistingFile);
   app.add_option("-o,--out-dir", f.out_dir, "Where save_map and Ctrl-C write trajectory.tum, map.pcd, report.json");
+  app.add_option("--autosave", f.autosave_period_s,
+                 "With --out-dir: seconds between autosaves of the outputs and the session (0: never)")
+      ->capture_default_str();
   app.add_option("--session", f.session_dir, "Localize in this saved session (OUT/session of a run) instead of mapping")
       ->check(CLI::ExistingDirectory);
   app.add_option("--name", o.name, "Node name: the namespace of its topics and service")->capture_default_str();

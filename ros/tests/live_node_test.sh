@@ -3,7 +3,8 @@
 # of a short simulated office bag (30 s out and back, so loops close), `rosbag record` of what the
 # node publishes. Checks the topics' types and rates, the tf tree map -> odom -> imu, the ~save_map
 # service, that the node's odometry equals `mmlio run`'s on the same bag and that its loop-corrected
-# trajectory scores within 5 % of it, with the loops listed in its report.
+# trajectory scores within 5 % of it, with the loops listed in its report. Then a node localizing in
+# the session `mmlio run` wrote, and one killed by SIGKILL and restarted on its autosave.
 # Usage: live_node_test.sh MMLIO MMLIO_NODE CONFIG_DIR
 set -euo pipefail
 MMLIO="$1" NODE="$2" CONFIG_DIR="$3"
@@ -126,6 +127,45 @@ common = [t for t in node if t in mapped]
 worst = max((math.dist(node[t], mapped[t]) for t in common), default=float("inf"))
 check(len(common) >= 0.9 * len(mapped), f"a localized pose for every mapped one ({len(common)} of {len(mapped)})")
 check(worst < 0.05, f"in the session's map frame: within {100 * worst:.2f} cm of the mapping run's poses")
+finish()
+PY
+
+# Nothing lost on a crash: autosaving every 5 s of sensor time, a node is killed with SIGKILL after
+# 20 s of the bag; its last autosave is a whole session, and a node restarted on it localizes there.
+stdbuf -oL -eL "$NODE" __name:=mmlio_crash _config:="$CONFIG_DIR/hvi.yaml" _calib:="$truth" \
+  _out_dir:="$work/crash" _autosave_period_s:=5 > "$work/crash_node.log" 2>&1 &
+crash_pid=$!
+pids+=($crash_pid)
+wait_for 30 rostopic info /mmlio_crash/odometry || fail "the crashing node never advertised its odometry"
+rosbag play -q --wait-for-subscribers -u 20 "$bag" > "$work/play_crash.log" 2>&1 || fail "rosbag play (crash)"
+kill -KILL "$crash_pid"
+wait "$crash_pid" 2> /dev/null || true
+[ -s "$work/crash/session/session.yaml" ] || fail "no autosaved session after SIGKILL"
+[ -z "$(ls -d "$work"/crash/session.* 2> /dev/null)" ] || fail "a half-written session was left beside the autosave"
+stdbuf -oL -eL "$NODE" __name:=mmlio_resumed _config:="$CONFIG_DIR/hvi.yaml" _calib:="$truth" \
+  _out_dir:="$work/resumed" _session:="$work/crash/session" > "$work/resumed_node.log" 2>&1 &
+resumed_pid=$!
+pids+=($resumed_pid)
+wait_for 30 rostopic info /mmlio_resumed/odometry || fail "the restarted node never advertised its odometry"
+rosbag play -q --wait-for-subscribers "$bag" > "$work/play_resumed.log" 2>&1 || fail "rosbag play (resumed)"
+sleep 3
+stop_node "$resumed_pid"
+python3 - "$work" << 'PY' || fail "crash checks above"
+import json, math, sys
+from live_checks import check, finish, read_tum
+
+work = sys.argv[1]
+saved = json.load(open(f"{work}/crash/report.json"))
+check(saved["outputs"].get("session_keyframes", 0) >= 5, f"the autosave holds the keyframes so far ({saved['outputs'].get('session_keyframes')})")
+loc = json.load(open(f"{work}/resumed/report.json")).get("localization", {})
+check(loc.get("localized") is True and loc.get("localized_at_end") is True,
+      f"the restarted node localized in the autosave ({loc.get('last_reason')})")
+node = {r[0]: [float(x) for x in r[1:4]] for r in read_tum(f"{work}/resumed/trajectory.tum")}
+mapped = {r[0]: [float(x) for x in r[1:4]] for r in read_tum(f"{work}/run/trajectory.tum")}
+common = [t for t in node if t in mapped]
+worst = max((math.dist(node[t], mapped[t]) for t in common), default=float("inf"))
+check(len(common) >= 0.9 * len(mapped), f"a pose for every mapped one ({len(common)} of {len(mapped)})")
+check(worst < 0.05, f"within {100 * worst:.2f} cm of the mapping run's poses, past the crash point too")
 finish()
 PY
 echo "PASS"
