@@ -4,7 +4,8 @@
 # the other DDS Debian packages (cyclone_listen, Cyclone DDS) reading odometry, path and /tf. Checks
 # the topics' frames and rates, that the odometry the peer received scores like `mmlio run`'s (ATE at
 # most 1.2 cm, and within 5 % of it), that the node's own odometry equals `mmlio run`'s, the
-# save_map service called as rmw_fastrtps clients call it, and the outputs written on SIGINT.
+# save_map service called as rmw_fastrtps clients call it, and the outputs written on SIGINT; then
+# the node localizing in the session `mmlio run` wrote.
 # Usage: live_ros2_test.sh MMLIO MMLIO_ROS2 ROS2_PLAY ROS2_SAVE_MAP CYCLONE_LISTEN CONFIG_DIR
 set -euo pipefail
 MMLIO="$1" NODE="$2" PLAY="$3" SAVE="$4" LISTEN="$5" CONFIG_DIR="$6"
@@ -77,6 +78,31 @@ check(report["input"]["queue_dropped"]["imu"] == 0 and report["input"]["queue_dr
 # one reaches the node (or the report says it did not).
 for name, st in report["input"]["lidar_streams"].items():
     check(st["missing"] == 0, f"every {name} scan arrived ({st['received']} received, {st['missing']} missing)")
+finish()
+PY
+
+# Localizing on DDS in the session `mmlio run` wrote (the same bag): found at once, in its map frame.
+stdbuf -oL -eL "$NODE" --config "$CONFIG_DIR/hvi.yaml" --calib "$truth" --out-dir "$work/loc" \
+  --session "$work/run/session" > "$work/loc_node.log" 2>&1 &
+loc_pid=$!
+pids+=($loc_pid)
+"$PLAY" "$ROS_DOMAIN_ID" "$bag" 1 livox_ros_driver2/msg/CustomMsg > "$work/play_loc.log" 2>&1 || fail "ros2_play (localize)"
+sleep 3
+stop_node "$loc_pid"
+python3 - "$work" << 'PY' || fail "localization checks above"
+import json, math, sys
+from live_checks import check, finish, read_tum
+
+work = sys.argv[1]
+loc = json.load(open(f"{work}/loc/report.json")).get("localization", {})
+check(loc.get("localized") is True, f"the node localized in the session ({loc.get('last_reason')})")
+check(0 <= loc.get("first_localized_s", -1) < 3, f"within 3 s of its first message ({loc.get('first_localized_s')} s)")
+node = {r[0]: [float(x) for x in r[1:4]] for r in read_tum(f"{work}/loc/trajectory.tum")}
+mapped = {r[0]: [float(x) for x in r[1:4]] for r in read_tum(f"{work}/run/trajectory.tum")}
+common = [t for t in node if t in mapped]
+worst = max((math.dist(node[t], mapped[t]) for t in common), default=float("inf"))
+check(len(common) >= 0.9 * len(mapped), f"a localized pose for every mapped one ({len(common)} of {len(mapped)})")
+check(worst < 0.05, f"in the session's map frame: within {100 * worst:.2f} cm of the mapping run's poses")
 finish()
 PY
 echo "PASS"

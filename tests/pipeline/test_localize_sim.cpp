@@ -4,7 +4,10 @@
 // never localized and says so.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <filesystem>
+#include <string>
 
 #include "mmlio/io/session_io.hpp"
 #include "mmlio/pipeline/runner.hpp"
@@ -62,7 +65,8 @@ class Localize : public ::testing::Test {
     return first.T_world_body * at->T_world_body.inverse();
   }
 
-  static inline Folder dir_{"mmlio_test_localize"};
+  // Per process: CTest runs each test of the suite as its own process, side by side.
+  static inline Folder dir_{"mmlio_test_localize_" + std::to_string(::getpid())};
   static inline std::unique_ptr<sim::Simulator> mapping_sim_;
   static inline std::unique_ptr<pipeline::RunResult> mapping_;
 };
