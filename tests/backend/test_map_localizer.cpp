@@ -102,6 +102,22 @@ TEST(MapLocalizer, FollowsTheOdometrysDriftThenIsLostWhenCarriedElsewhereAndFind
   EXPECT_GT(found_again_at, 13 + MapLocalizerConfig().lost_after - 1);  // not before it knew it was lost
 }
 
+// Where the room's first sweep alone is ambiguous (its half-turn twin fits nearly as well), a rough
+// hint of where the rig starts (a metre and 20 deg off) finds it at once.
+TEST(MapLocalizer, AnInitialPoseHintSettlesWhatTheFirstSweepCannot) {
+  const Session session = roomASession();
+  const Eigen::Isometry3d start = route()[0] * pose(0.3, 0.8, 0.1, 170 * kDeg);
+  const Eigen::Isometry3d T_odom_map = pose(2.0, -1.0, 0, 35 * kDeg);
+  MapLocalizer without(session);
+  MapLocalizer with(session, MapLocalizerConfig(), start * pose(0.8, -0.5, 0, 20 * kDeg));
+  const std::vector<Eigen::Vector3d> cloud = sweep(start, 500);
+  without.addKeyframe(fromSec(1), T_odom_map * start, cloud);
+  with.addKeyframe(fromSec(1), T_odom_map * start, cloud);
+  EXPECT_FALSE(without.status().localized) << without.status().last_reason;
+  ASSERT_TRUE(with.status().localized) << with.status().last_reason;
+  EXPECT_LT(errorM(with, fromSec(1), T_odom_map * start, start), 0.05);
+}
+
 TEST(MapLocalizer, ANeverFoundRunHasNoPoseInTheMap) {
   const Session session = roomASession();
   MapLocalizer localizer(session);
