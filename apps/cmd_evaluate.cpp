@@ -35,6 +35,7 @@ struct EvaluateArgs {
   std::string removed_path;
   std::string reference_map_path;
   std::string reference_est_path;
+  std::vector<std::string> frame_from;  // GT EST: the frame fixed by aligning another run (localization)
   eval::EvalOptions options;
 };
 
@@ -127,7 +128,10 @@ void printTable(const eval::EvalResult& r, const EvaluateArgs& args) {
   out += row("coverage", 100.0 * r.coverage, "% of GT time span", "%.1f");
   out += row("GT path length", r.path_length_m, "m", "%.1f");
   out += std::string("  alignment              ") +
-         (args.no_align ? "none" : (args.scale ? "Umeyama SE(3) + scale" : "Umeyama SE(3)")) + "\n";
+         (!args.frame_from.empty() ? "none (frame fixed by --frame-from)"
+          : args.no_align          ? "none"
+                                   : (args.scale ? "Umeyama SE(3) + scale" : "Umeyama SE(3)")) +
+         "\n";
   if (args.scale) out += row("scale", r.scale, "");
   out += row("ATE RMSE", r.ate_rmse_m, "m");
   out += row("ATE mean", r.ate_mean_m, "m");
@@ -155,7 +159,18 @@ void runEvaluate(const EvaluateArgs& args) {
   if (args.no_align && args.scale) throw Error("evaluate: --scale needs alignment; drop --no-align");
 
   const Trajectory gt = readNonEmptyTum(args.gt_path, "ground-truth");
-  const Trajectory est = readNonEmptyTum(args.est_path, "estimated");
+  Trajectory est = readNonEmptyTum(args.est_path, "estimated");
+  if (!args.frame_from.empty()) {
+    // A localized trajectory is in the map frame of the run that made the map: that run, aligned
+    // once onto its own truth, fixes the frame; the localized poses are then compared as they are.
+    if (args.no_align || args.scale) throw Error("evaluate: --frame-from fixes the frame; drop --no-align / --scale");
+    eval::EvalOptions once = options;
+    const Eigen::Isometry3d T_gt_map = eval::evaluate(readNonEmptyTum(args.frame_from[0], "frame ground-truth"),
+                                                      readNonEmptyTum(args.frame_from[1], "frame estimate"), once)
+                                           .T_gt_est;
+    for (StampedPose& p : est) p.T_world_body = T_gt_map * p.T_world_body;
+    options.align = false;
+  }
   const eval::EvalResult result = eval::evaluate(gt, est, options);
   if (!args.plot_path.empty()) {
     const bool html = std::filesystem::path(args.plot_path).extension() == ".html";
@@ -231,6 +246,11 @@ void registerEvaluateCommand(CLI::App& app) {
   cmd->add_option("--segment", args->options.segment_m, "RPE segment length along the GT path, m")
       ->capture_default_str();
   cmd->add_flag("--no-align", args->no_align, "Compare in the raw frames (no Umeyama alignment)");
+  cmd->add_option("--frame-from", args->frame_from,
+                  "GT EST: fix the frame once by aligning EST (e.g. the mapping run) onto GT, then compare --est "
+                  "(e.g. a localization in its map) without further alignment")
+      ->expected(2)
+      ->check(CLI::ExistingFile);
   cmd->add_flag("--scale", args->scale, "Also estimate a scale in the alignment (Sim(3))");
   cmd->add_option("--map", args->map_path,
                   "Also score this map (PCD, estimate frame) against the true surfaces of --scenario (simulated runs)");

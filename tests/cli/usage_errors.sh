@@ -59,6 +59,14 @@ if [ "$(grep -vc "^#" "$tmp/run_rig/trajectory.tum" 2>/dev/null)" -lt 30 ] || ! 
   echo "FAIL: init's config and the preset give different trajectories"
   failed=1
 fi
+# evaluate --frame-from: the frame fixed by a run aligned onto its truth; the same run evaluated in it
+# without further alignment scores as its own aligned evaluation.
+aligned=$("$mmlio" evaluate --gt "$tmp/sim/office_gt.tum" --est "$tmp/run_hvi/trajectory.tum" --json)
+fixed=$("$mmlio" evaluate --gt "$tmp/sim/office_gt.tum" --est "$tmp/run_hvi/trajectory.tum" --json \
+  --frame-from "$tmp/sim/office_gt.tum" "$tmp/run_hvi/trajectory.tum")
+python3 -c 'import json,sys; a,b=(json.loads(x)["ate_rmse_m"] for x in sys.argv[1:]); sys.exit(abs(a-b) > 1e-9)' \
+  "$aligned" "$fixed" || { echo "FAIL: evaluate --frame-from: $aligned vs $fixed"; failed=1; }
+expect 1 evaluate --gt "$tmp/sim/office_gt.tum" --est "$tmp/run_hvi/trajectory.tum" --frame-from "$tmp/sim/office_gt.tum"
 # localize: a missing session, a folder that is no session, a damaged one, a bad pose hint, another rig.
 expect 1 localize "$tmp/sim/office.bag"                                   # no --session
 expect 1 localize "$tmp/sim/office.bag" --session /nonexistent/session
