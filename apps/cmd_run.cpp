@@ -97,6 +97,13 @@ void run(const RunArgs& a) {
   std::shared_ptr<const Session> session;
   std::optional<Eigen::Isometry3d> initial_pose;
   if (!a.session.empty()) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    fs::path folder = fs::absolute(fs::path(a.session)).lexically_normal();
+    if (!folder.has_filename()) folder = folder.parent_path();  // "out/session/"
+    if (fs::exists(a.out) && fs::equivalent(fs::path(a.out), folder.parent_path(), ec))
+      throw Error("--out " + a.out + " holds the session's own run: its trajectory and report would be replaced; " +
+                  "localize into another folder");
     if (!a.initial_pose.empty()) initial_pose = parseInitialPose(a.initial_pose);
     session = std::make_shared<const Session>(io::readSession(a.session));
   }

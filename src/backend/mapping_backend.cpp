@@ -92,7 +92,7 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
     backend::KeyframeNode node;
     node.stamp_ns = sweep.state.stamp_ns;
     node.T_world_body_odom = T_world_body;
-    if (cfg_.loop_enabled) {
+    if (cfg_.loop_enabled || cfg_.keep_keyframe_clouds) {
       std::vector<Eigen::Vector3d> pts;
       pts.reserve(sweep.points_body.size());
       for (const Point& p : sweep.points_body) pts.emplace_back(p.xyz.cast<double>());

@@ -16,11 +16,22 @@
 
 namespace mmlio::pipeline {
 
+namespace {
+
+/// The back end keeps keyframe clouds for loop closure, and for the session a later run relocalizes in.
+backend::MappingConfig mappingConfig(const config::RigConfig& cfg) {
+  backend::MappingConfig m = cfg.mapping;
+  m.keep_keyframe_clouds = cfg.output.write_session;
+  return m;
+}
+
+}  // namespace
+
 System::System(const config::RigConfig& cfg, const std::string& mode, SweepObserver observer)
     : cfg_(cfg),
       mode_(mode.empty() ? cfg.mode : mode),
       observer_(std::move(observer)),
-      mapping_(cfg.mapping),
+      mapping_(mappingConfig(cfg)),
       degeneracy_(cfg.estimator.degeneracy.min_points, cfg.estimator.remap_degenerate),
       online_(cfg, mode_, [this](estimator::SweepResult r) { onSweep(std::move(r)); }) {
   dynamic_.enabled = cfg.estimator.dynamic.enabled;

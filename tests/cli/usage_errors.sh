@@ -73,8 +73,12 @@ expect 1 localize "$tmp/sim/office.bag" --session /nonexistent/session
 expect 1 localize "$tmp/sim/office.bag" --session "$tmp"                  # no session.yaml
 session="$tmp/run_hvi/session"
 expect 1 localize "$tmp/sim/office.bag" --session "$session" --initial-pose 1,2,three,0
+expect 1 localize "$tmp/sim/office.bag" --session "$session" --out "$tmp/run_hvi"  # would overwrite its run
 sed 's/name: velodyne/name: vlp16/' "$(dirname "$0")/../../config/hvi.yaml" > "$tmp/other_rig.yaml"
 expect 1 localize "$tmp/sim/office.bag" --session "$session" --config "$tmp/other_rig.yaml"
+# A run without loop closure (run_hvi: --no-loop) still leaves the keyframe clouds relocalization needs.
+"$mmlio" -q localize "$tmp/sim/office.bag" --session "$session" --calib "$tmp/sim/office_truth.yaml" --no-progress \
+  --out "$tmp/loc" > /dev/null 2>&1 || { echo "FAIL: localize in the session of a run without loop closure"; failed=1; }
 cp -r "$session" "$tmp/damaged"
 truncate -s 100 "$tmp/damaged/keyframe_clouds.pcd"
 expect 1 localize "$tmp/sim/office.bag" --session "$tmp/damaged" --calib "$tmp/sim/office_truth.yaml"

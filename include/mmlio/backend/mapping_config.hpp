@@ -9,9 +9,10 @@ namespace mmlio::backend {
 struct MappingConfig {
   bool loop_enabled = true;
   LoopCloser::Config loop;
-  double map_leaf_m = 0.05;         // output map resolution (0: every point)
-  double loop_cloud_voxel_m = 0.1;  // keyframe clouds kept for loop verification
-  int loop_check_every = 4;         // try loop detection on every n-th keyframe
+  double map_leaf_m = 0.05;          // output map resolution (0: every point)
+  double loop_cloud_voxel_m = 0.1;   // keyframe clouds kept for loop verification ...
+  bool keep_keyframe_clouds = true;  // ... and, with loop closure off, still for the session (relocalization)
+  int loop_check_every = 4;          // try loop detection on every n-th keyframe
   // A loop may move the pose by at most max_loop_correction_base_m plus max_drift_fraction of the
   // route between its ends through the graph, and turn it by at most max_loop_rotation_base_deg
   // plus max_rotation_drift_deg_per_m per metre of it (loop_plausibility.hpp).
