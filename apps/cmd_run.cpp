@@ -97,11 +97,7 @@ void run(const RunArgs& a) {
   std::shared_ptr<const Session> session;
   std::optional<Eigen::Isometry3d> initial_pose;
   if (!a.session.empty()) {
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    fs::path folder = fs::absolute(fs::path(a.session)).lexically_normal();
-    if (!folder.has_filename()) folder = folder.parent_path();  // "out/session/"
-    if (fs::exists(a.out) && fs::equivalent(fs::path(a.out), folder.parent_path(), ec))
+    if (io::holdsSession(a.out, a.session))
       throw Error("--out " + a.out + " holds the session's own run: its trajectory and report would be replaced; " +
                   "localize into another folder");
     if (!a.initial_pose.empty()) initial_pose = parseInitialPose(a.initial_pose);
@@ -170,22 +166,27 @@ void run(const RunArgs& a) {
   }
 }
 
+/// The options `run` and `localize` share: the bag, the rig, where outputs go, mode and calibration.
+void addInputOptions(CLI::App* cmd, RunArgs& args) {
+  cmd->add_option("bag", args.bag, "Input bag: ROS 1 .bag, ROS 2 .mcap, rosbag2 folder or .db3")
+      ->required()
+      ->check(CLI::ExistingPath);
+  cmd->add_option("-c,--config", args.config, "Rig config YAML (default: built-in = config/hvi.yaml)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("-o,--out", args.out, "Output directory")->capture_default_str();
+  cmd->add_option("-m,--mode", args.mode, "Sensor mode: hvi | vi | hi (default: the config's)")
+      ->check(CLI::IsMember({"hvi", "vi", "hi"}));
+  cmd->add_option("--calib", args.calib, "Calibration YAML overriding extrinsics and clock offsets, or auto")
+      ->check(CLI::ExistingFile | CLI::IsMember({"auto"}));
+}
+
 }  // namespace
 
 void registerRunCommand(CLI::App& app) {
   auto args = std::make_shared<RunArgs>();
   CLI::App* cmd =
       app.add_subcommand("run", "Odometry and mapping on a ROS 1 or ROS 2 bag: trajectory.tum, map.pcd, report.json");
-  cmd->add_option("bag", args->bag, "Input bag: ROS 1 .bag, ROS 2 .mcap, rosbag2 folder or .db3")
-      ->required()
-      ->check(CLI::ExistingPath);
-  cmd->add_option("-c,--config", args->config, "Rig config YAML (default: built-in = config/hvi.yaml)")
-      ->check(CLI::ExistingFile);
-  cmd->add_option("-o,--out", args->out, "Output directory")->capture_default_str();
-  cmd->add_option("-m,--mode", args->mode, "Sensor mode: hvi | vi | hi (default: the config's)")
-      ->check(CLI::IsMember({"hvi", "vi", "hi"}));
-  cmd->add_option("--calib", args->calib, "Calibration YAML overriding extrinsics and clock offsets, or auto")
-      ->check(CLI::ExistingFile | CLI::IsMember({"auto"}));
+  addInputOptions(cmd, *args);
   cmd->add_option("--gt", args->gt, "Ground-truth TUM trajectory: adds the evaluation to the report")
       ->check(CLI::ExistingFile);
   cmd->add_option("--duration", args->duration_s, "Stop after this many seconds of the bag");
@@ -208,19 +209,10 @@ void registerLocalizeCommand(CLI::App& app) {
   auto args = std::make_shared<RunArgs>();
   CLI::App* cmd = app.add_subcommand(
       "localize", "Localize a bag in a saved session's map (OUT/session of a run): trajectory.tum in its frame");
-  cmd->add_option("bag", args->bag, "Input bag: ROS 1 .bag, ROS 2 .mcap, rosbag2 folder or .db3")
-      ->required()
-      ->check(CLI::ExistingPath);
+  addInputOptions(cmd, *args);
   cmd->add_option("-s,--session", args->session, "Session folder written by mmlio run (OUT/session)")
       ->required()
       ->check(CLI::ExistingDirectory);
-  cmd->add_option("-c,--config", args->config, "Rig config YAML (default: built-in = config/hvi.yaml)")
-      ->check(CLI::ExistingFile);
-  cmd->add_option("-o,--out", args->out, "Output directory")->capture_default_str();
-  cmd->add_option("-m,--mode", args->mode, "Sensor mode: hvi | vi | hi (default: the config's)")
-      ->check(CLI::IsMember({"hvi", "vi", "hi"}));
-  cmd->add_option("--calib", args->calib, "Calibration YAML overriding extrinsics and clock offsets, or auto")
-      ->check(CLI::ExistingFile | CLI::IsMember({"auto"}));
   cmd->add_option("--initial-pose", args->initial_pose,
                   "Where the rig starts in the map, roughly: x,y,z,yaw_deg (default: found by place recognition)");
   cmd->add_option("--gt", args->gt, "Ground-truth TUM trajectory in the map's frame: adds the evaluation")

@@ -1,7 +1,5 @@
 #include "live_feeder.hpp"
 
-#include <filesystem>
-
 #include "mmlio/config/calibration_source.hpp"
 #include "mmlio/config/source_options.hpp"
 #include "mmlio/core/error.hpp"
@@ -48,14 +46,9 @@ LiveFeeder::LiveFeeder(const config::RigConfig& cfg, FeederOptions options, Outl
           {static_cast<std::size_t>(options_.max_queued_imu), static_cast<std::size_t>(options_.max_queued_scans), 8}),
       imu_gate_(cfg.imu.topic, cfg.imu.acc_unit),
       system_(cfg, options_.mode, [this](const estimator::SweepResult& r) { onSweep(r); }) {
-  if (!options_.session_dir.empty() && !options_.out_dir.empty()) {
-    namespace fs = std::filesystem;
-    fs::path folder = fs::absolute(fs::path(options_.session_dir)).lexically_normal();
-    if (!folder.has_filename()) folder = folder.parent_path();
-    std::error_code ec;
-    if (fs::exists(options_.out_dir) && fs::equivalent(fs::path(options_.out_dir), folder.parent_path(), ec))
-      throw Error("the output folder " + options_.out_dir + " holds the session's own run: localize into another");
-  }
+  if (!options_.session_dir.empty() && !options_.out_dir.empty() &&
+      io::holdsSession(options_.out_dir, options_.session_dir))
+    throw Error("the output folder " + options_.out_dir + " holds the session's own run: localize into another");
   if (!options_.session_dir.empty())
     system_.localizeIn(std::make_shared<const Session>(io::readSession(options_.session_dir)), options_.session_dir);
   lidars_ = config::activeLidars(cfg, system_.mode());

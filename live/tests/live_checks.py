@@ -1,4 +1,5 @@
 """What the live node tests' checks share: every check printed, the run failed at the end if any did."""
+import math
 import sys
 
 errors = []
@@ -13,6 +14,17 @@ def check(ok, what):
 def read_tum(path):
     """A TUM file's poses as lists of fields (text, so equal means equal to the last digit)."""
     return [line.split() for line in open(path) if line.strip() and not line.startswith("#")]
+
+
+def check_in_session_frame(work, folder, what):
+    """The localized poses in WORK/FOLDER: one for nearly every pose of the mapping run (WORK/run, the
+    session's maker, on the same bag) and each within 5 cm of it, in the session's map frame."""
+    node = {r[0]: [float(x) for x in r[1:4]] for r in read_tum(f"{work}/{folder}/trajectory.tum")}
+    mapped = {r[0]: [float(x) for x in r[1:4]] for r in read_tum(f"{work}/run/trajectory.tum")}
+    common = [t for t in node if t in mapped]
+    worst = max((math.dist(node[t], mapped[t]) for t in common), default=float("inf"))
+    check(len(common) >= 0.9 * len(mapped), f"a localized pose for every mapped one ({len(common)} of {len(mapped)})")
+    check(worst < 0.05, f"{what}: within {100 * worst:.2f} cm of the mapping run's poses")
 
 
 def finish():

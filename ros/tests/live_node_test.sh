@@ -114,19 +114,14 @@ rosbag play -q --wait-for-subscribers "$bag" > "$work/play_loc.log" 2>&1 || fail
 sleep 3
 stop_node "$loc_pid"
 python3 - "$work" << 'PY' || fail "localization checks above"
-import json, math, sys
-from live_checks import check, finish, read_tum
+import json, sys
+from live_checks import check, check_in_session_frame, finish
 
 work = sys.argv[1]
 loc = json.load(open(f"{work}/loc/report.json")).get("localization", {})
 check(loc.get("localized") is True, f"the node localized in the session ({loc.get('last_reason')})")
 check(0 <= loc.get("first_localized_s", -1) < 3, f"within 3 s of its first message ({loc.get('first_localized_s')} s)")
-node = {r[0]: [float(x) for x in r[1:4]] for r in read_tum(f"{work}/loc/trajectory.tum")}
-mapped = {r[0]: [float(x) for x in r[1:4]] for r in read_tum(f"{work}/run/trajectory.tum")}
-common = [t for t in node if t in mapped]
-worst = max((math.dist(node[t], mapped[t]) for t in common), default=float("inf"))
-check(len(common) >= 0.9 * len(mapped), f"a localized pose for every mapped one ({len(common)} of {len(mapped)})")
-check(worst < 0.05, f"in the session's map frame: within {100 * worst:.2f} cm of the mapping run's poses")
+check_in_session_frame(work, "loc", "in the session's map frame")
 finish()
 PY
 
@@ -151,8 +146,8 @@ rosbag play -q --wait-for-subscribers "$bag" > "$work/play_resumed.log" 2>&1 || 
 sleep 3
 stop_node "$resumed_pid"
 python3 - "$work" << 'PY' || fail "crash checks above"
-import json, math, sys
-from live_checks import check, finish, read_tum
+import json, sys
+from live_checks import check, check_in_session_frame, finish
 
 work = sys.argv[1]
 saved = json.load(open(f"{work}/crash/report.json"))
@@ -160,12 +155,7 @@ check(saved["outputs"].get("session_keyframes", 0) >= 5, f"the autosave holds th
 loc = json.load(open(f"{work}/resumed/report.json")).get("localization", {})
 check(loc.get("localized") is True and loc.get("localized_at_end") is True,
       f"the restarted node localized in the autosave ({loc.get('last_reason')})")
-node = {r[0]: [float(x) for x in r[1:4]] for r in read_tum(f"{work}/resumed/trajectory.tum")}
-mapped = {r[0]: [float(x) for x in r[1:4]] for r in read_tum(f"{work}/run/trajectory.tum")}
-common = [t for t in node if t in mapped]
-worst = max((math.dist(node[t], mapped[t]) for t in common), default=float("inf"))
-check(len(common) >= 0.9 * len(mapped), f"a pose for every mapped one ({len(common)} of {len(mapped)})")
-check(worst < 0.05, f"within {100 * worst:.2f} cm of the mapping run's poses, past the crash point too")
+check_in_session_frame(work, "resumed", "past the crash point too")
 finish()
 PY
 echo "PASS"

@@ -149,6 +149,13 @@ void writeSession(const std::string& dir, const Session& session, const SessionI
   fs::remove_all(old, ec);
 }
 
+bool holdsSession(const std::string& out_dir, const std::string& session_dir) {
+  fs::path folder = fs::absolute(fs::path(session_dir)).lexically_normal();
+  if (!folder.has_filename()) folder = folder.parent_path();  // "out/session/"
+  std::error_code ec;
+  return fs::exists(out_dir, ec) && fs::equivalent(fs::path(out_dir), folder.parent_path(), ec);
+}
+
 Session readSession(const std::string& dir, SessionInfo* info_out) {
   const fs::path root(dir);
   if (!fs::is_directory(root)) throw Error("not a session folder: " + dir);

@@ -29,4 +29,8 @@ void writeSession(const std::string& dir, const Session& session, const SessionI
 /// missing or malformed file, another format version, or files that disagree (counts, indices).
 Session readSession(const std::string& dir, SessionInfo* info = nullptr);
 
+/// Whether `out_dir` (an existing folder) is the one that holds the session at `session_dir`, i.e. the
+/// run that wrote it: a localization writing there would replace that run's trajectory and report.
+bool holdsSession(const std::string& out_dir, const std::string& session_dir);
+
 }  // namespace mmlio::io
