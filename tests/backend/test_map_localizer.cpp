@@ -5,8 +5,7 @@
 #include <cmath>
 
 #include "mmlio/backend/map_localizer.hpp"
-#include "mmlio/map/kd_tree.hpp"
-#include "synthetic_scene.hpp"
+#include "session_scene.hpp"
 
 namespace mmlio::backend {
 namespace {
@@ -15,42 +14,12 @@ using testing::pose;
 constexpr double kDeg = M_PI / 180.0;
 
 std::vector<Eigen::Vector3d> sweep(const Eigen::Isometry3d& T_map_body, unsigned seed) {
-  return map::voxelCentroids(testing::scan(testing::roomA(), T_map_body, seed), 0.1);
+  return testing::keyframeCloud(testing::roomA(), T_map_body, seed);
 }
 
-/// A walk around room A, a keyframe every 1.5 m or so.
-std::vector<Eigen::Isometry3d> route() {
-  std::vector<Eigen::Isometry3d> out;
-  const std::vector<Eigen::Vector2d> corners = {{-5, -3}, {3.5, -3.5}, {4.5, 3}, {-4.5, 2.5}, {-5, -3}};
-  for (std::size_t c = 0; c + 1 < corners.size(); ++c) {
-    const Eigen::Vector2d d = corners[c + 1] - corners[c];
-    const int steps = static_cast<int>(std::ceil(d.norm() / 1.5));
-    for (int i = 0; i < steps; ++i) {
-      const Eigen::Vector2d p = corners[c] + d * i / steps;
-      out.push_back(pose(p.x(), p.y(), 1, std::atan2(d.y(), d.x())));
-    }
-  }
-  return out;
-}
+std::vector<Eigen::Isometry3d> route() { return testing::roomARoute(); }
 
-Session roomASession() {
-  Session s;
-  s.cloud_voxel_m = 0.1;
-  const std::vector<Eigen::Isometry3d> poses = route();
-  for (std::size_t k = 0; k < poses.size(); ++k) {
-    SessionKeyframe kf;
-    kf.stamp_ns = fromSec(static_cast<double>(k));
-    kf.T_map_body = kf.T_odom_body = poses[k];
-    kf.cloud_body = sweep(poses[k], 10 + static_cast<unsigned>(k));
-    s.keyframes.push_back(std::move(kf));
-    for (const Eigen::Vector3d& p : s.keyframes.back().cloud_body) {
-      Point q;
-      q.xyz = (poses[k] * p).cast<float>();
-      s.map.push_back(q);
-    }
-  }
-  return s;
-}
+Session roomASession() { return testing::sessionOf(testing::roomA(), route()); }
 
 double errorM(const MapLocalizer& l, Stamp t, const Eigen::Isometry3d& T_odom_body, const Eigen::Isometry3d& truth) {
   return ((*l.mapFromOdom(t) * T_odom_body).translation() - truth.translation()).norm();

@@ -6,8 +6,7 @@
 #include <cmath>
 
 #include "mmlio/backend/relocalizer.hpp"
-#include "mmlio/map/kd_tree.hpp"
-#include "synthetic_scene.hpp"
+#include "session_scene.hpp"
 
 namespace mmlio::backend {
 namespace {
@@ -16,37 +15,12 @@ using testing::pose;
 constexpr double kDeg = M_PI / 180.0;
 
 std::vector<Eigen::Vector3d> sweep(const testing::Scene& scene, const Eigen::Isometry3d& T_map_body, unsigned seed) {
-  return map::voxelCentroids(testing::scan(scene, T_map_body, seed), 0.1);
+  return testing::keyframeCloud(scene, T_map_body, seed);
 }
 
-/// A session of keyframes at `poses` in `scene` (their clouds as a mapping run keeps them).
-Session sessionOf(const testing::Scene& scene, const std::vector<Eigen::Isometry3d>& poses) {
-  Session s;
-  s.cloud_voxel_m = 0.1;
-  for (std::size_t k = 0; k < poses.size(); ++k) {
-    SessionKeyframe kf;
-    kf.stamp_ns = fromSec(static_cast<double>(k));
-    kf.T_map_body = kf.T_odom_body = poses[k];
-    kf.cloud_body = sweep(scene, poses[k], 10 + static_cast<unsigned>(k));
-    s.keyframes.push_back(std::move(kf));
-  }
-  return s;
-}
+using testing::sessionOf;
 
-/// A walk around room A with a keyframe every 1.5 m or so, as a mapping run keeps them.
-Session roomASession() {
-  std::vector<Eigen::Isometry3d> route;
-  const std::vector<Eigen::Vector2d> corners = {{-5, -3}, {3.5, -3.5}, {4.5, 3}, {-4.5, 2.5}, {-5, -3}};
-  for (std::size_t c = 0; c + 1 < corners.size(); ++c) {
-    const Eigen::Vector2d d = corners[c + 1] - corners[c];
-    const int steps = static_cast<int>(std::ceil(d.norm() / 1.5));
-    for (int i = 0; i < steps; ++i) {
-      const Eigen::Vector2d p = corners[c] + d * i / steps;
-      route.push_back(pose(p.x(), p.y(), 1, std::atan2(d.y(), d.x())));
-    }
-  }
-  return sessionOf(testing::roomA(), route);
-}
+Session roomASession() { return sessionOf(testing::roomA(), testing::roomARoute()); }
 
 double angleDeg(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
   return Eigen::AngleAxisd((a.inverse() * b).rotation()).angle() / kDeg;
