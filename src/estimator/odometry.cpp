@@ -34,7 +34,7 @@ OnlineCalibration Odometry::Impl::onlineCalibration(const OdometryConfig& c, con
     if (anchor < 0 && e.kind == LidarKind::kSolidState) anchor = static_cast<int>(i);
   }
   return OnlineCalibration(c.online_calibration, std::move(given), std::move(refine), anchor, c.map_voxel_m,
-                           c.lidar_sigma_m, c.huber_loss_m, c.local_map_radius_m);
+                           c.lidar_sigma_m, c.local_map_radius_m);
 }
 
 SlidingWindowConfig Odometry::Impl::windowConfig(const OdometryConfig& c) {

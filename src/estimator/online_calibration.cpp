@@ -9,9 +9,15 @@
 namespace mmlio::estimator {
 namespace {
 
-constexpr int kPose = 6;                       // dp, dtheta (right perturbation, as the LiDAR factors)
-constexpr std::size_t kMinMatches = 50;        // per LiDAR in a sweep that informs the calibration
-constexpr double kMaxResidualM = 0.1;          // the registration's gate: farther matches are other surfaces
+constexpr int kPose = 6;                 // dp, dtheta (right perturbation, as the LiDAR factors)
+constexpr std::size_t kMinMatches = 50;  // per LiDAR in a sweep that informs the calibration
+// Tighter than the registration's gate (0.1 m) and robust scale: a lamp under a ceiling, a table's
+// edge or a beam lies 3-6 cm from the surface it borders. Matched to it, points above the sensor
+// sit high and points below sit low, for both LiDARs alike; as the LiDARs see different shares above
+// and below, that biased the refined one's height and tilt. The points are matched where the
+// estimate places them, so a tight gate does not hide a large error.
+constexpr double kMaxResidualM = 0.03;
+constexpr double kHuberM = 0.02;
 constexpr double kMaxStepPriorSigmas = 3.0;    // a sweep moving the estimate further is an outlier
 constexpr double kRelativeEigenFloor = 1e-9;   // pose directions weaker than this carry nothing
 constexpr double kHeldSigma = 1e-6;            // the prior of a quantity kept as given
@@ -46,6 +52,22 @@ Features thinned(const Features& f, std::size_t lidars, std::size_t max_per_lida
   return out;
 }
 
+/// Refined LiDAR's extrinsic with correction c (rotation 3, translation 3, clock 1).
+Eigen::Isometry3d corrected(const Eigen::Isometry3d& given, const Eigen::Ref<const Eigen::VectorXd>& c) {
+  Eigen::Isometry3d T = given;
+  T.linear() = so3::exp(Eigen::Vector3d(c.head<3>())).toRotationMatrix() * T.linear();
+  T.translation() += c.segment<3>(3);
+  return T;
+}
+
+/// The body-frame motion over clock correction dt_s at the body's velocity and turn rate.
+Eigen::Isometry3d shiftedBy(double dt_s, const Eigen::Vector3d& v_body, const Eigen::Vector3d& w_body) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = so3::exp(w_body * dt_s).toRotationMatrix();
+  T.translation() = v_body * dt_s;
+  return T;
+}
+
 /// Inverse on the directions the matrix informs, zero on the others.
 Eigen::MatrixXd pseudoInverse(const Eigen::MatrixXd& m) {
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(m);
@@ -66,13 +88,12 @@ double determinedBelow(Eigen::Index i) {
 
 OnlineCalibration::OnlineCalibration(OnlineCalibrationConfig cfg, std::vector<LidarExtrinsic> lidars,
                                      std::vector<char> refine, int anchor, double map_voxel_m, double lidar_sigma_m,
-                                     double huber_m, double map_radius_m)
+                                     double map_radius_m)
     : cfg_(cfg),
       given_(std::move(lidars)),
       refine_(std::move(refine)),
       anchor_(anchor),
       lidar_sigma_m_(lidar_sigma_m),
-      huber_m_(huber_m),
       map_radius_m_(map_radius_m),
       edge_map_(2.5 * map_voxel_m, 60),
       plane_map_(2.5 * map_voxel_m, 60, true) {
@@ -93,26 +114,36 @@ OnlineCalibration::OnlineCalibration(OnlineCalibrationConfig cfg, std::vector<Li
 }
 
 Eigen::Isometry3d OnlineCalibration::extrinsic(std::size_t lidar) const {
-  Eigen::Isometry3d T = given_[lidar].T_imu_sensor;
-  for (std::size_t j = 0; j < refined_.size(); ++j) {
-    if (refined_[j].lidar != lidar || !active_) continue;
-    const auto x = x_.segment<kParams>(kParams * j);
-    T.linear() = so3::exp(x.head<3>()).toRotationMatrix() * T.linear();
-    T.translation() += x.segment<3>(3);
-  }
-  return T;
+  for (std::size_t j = 0; j < refined_.size(); ++j)
+    if (refined_[j].lidar == lidar && active_)
+      return corrected(given_[lidar].T_imu_sensor, x_.segment<kParams>(kParams * j));
+  return given_[lidar].T_imu_sensor;
 }
 
 Eigen::Isometry3d OnlineCalibration::clockShift(std::size_t lidar, const Eigen::Vector3d& v_body,
                                                 const Eigen::Vector3d& w_body) const {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  for (std::size_t j = 0; j < refined_.size(); ++j)
+    if (refined_[j].lidar == lidar && active_)
+      return shiftedBy(x_[static_cast<Eigen::Index>(kParams * j + 6)], v_body, w_body);
+  return Eigen::Isometry3d::Identity();
+}
+
+Features OnlineCalibration::placedAtEstimate(Features f, const Eigen::Vector3d& v_body,
+                                             const Eigen::Vector3d& w_body) const {
   for (std::size_t j = 0; j < refined_.size(); ++j) {
-    if (refined_[j].lidar != lidar || !active_) continue;
-    const double dt = x_[static_cast<Eigen::Index>(kParams * j + 6)];
-    T.linear() = so3::exp(w_body * dt).toRotationMatrix();
-    T.translation() = v_body * dt;
+    const auto k = static_cast<Eigen::Index>(kParams * j);
+    const Eigen::Isometry3d& given = given_[refined_[j].lidar].T_imu_sensor;
+    const Eigen::Isometry3d applied = shiftedBy(x_[k + 6], v_body, w_body) * corrected(given, x_.segment<kParams>(k));
+    const Eigen::Isometry3d estimated =
+        shiftedBy(estimate_[k + 6], v_body, w_body) * corrected(given, estimate_.segment<kParams>(k));
+    const Eigen::Isometry3d move = estimated * applied.inverse();
+    const auto source = static_cast<std::uint8_t>(refined_[j].lidar);
+    for (std::size_t i = 0; i < f.planes.size(); ++i)
+      if (f.plane_source[i] == source) f.planes[i] = move * f.planes[i];
+    for (std::size_t i = 0; i < f.edges.size(); ++i)
+      if (f.edge_source[i] == source) f.edges[i] = move * f.edges[i];
   }
-  return T;
+  return f;
 }
 
 void OnlineCalibration::addAnchorKeyframe(const Features& f, const Eigen::Isometry3d& T_world_body) {
@@ -137,14 +168,18 @@ bool OnlineCalibration::observe(const Features& f, const Eigen::Isometry3d& T_wo
   if (!active_ || anchor_keyframes_ < kMinAnchorKeyframes) return false;
   MapMatchConfig matching;
   matching.max_residual_m = kMaxResidualM;
+  matching.voxel_plane_gate_m = kMaxResidualM;
+  // The refined LiDARs' points where the estimate puts them: the sweep is linearised at the estimate.
   const std::vector<MapMatch> matches =
-      findMapMatches(thinned(f, given_.size(), kMatchedPerLidar), T_world_body, edge_map_, plane_map_, matching);
+      findMapMatches(placedAtEstimate(thinned(f, given_.size(), kMatchedPerLidar), v_body, w_body), T_world_body,
+                     edge_map_, plane_map_, matching);
 
   std::vector<int> block(given_.size(), -1);  // column of each refined LiDAR's correction
   std::vector<Eigen::Vector3d> origin(given_.size(), Eigen::Vector3d::Zero());  // its sensor origin, IMU frame
   for (std::size_t j = 0; j < refined_.size(); ++j) {
     block[refined_[j].lidar] = kPose + static_cast<int>(kParams * j);
-    origin[refined_[j].lidar] = extrinsic(refined_[j].lidar).translation();
+    origin[refined_[j].lidar] =
+        corrected(given_[refined_[j].lidar].T_imu_sensor, estimate_.segment<kParams>(kParams * j)).translation();
   }
   std::vector<std::size_t> per_lidar(given_.size(), 0);
   const auto n = static_cast<Eigen::Index>(kPose + x_.size());
@@ -180,7 +215,7 @@ bool OnlineCalibration::observe(const Features& f, const Eigen::Isometry3d& T_wo
       r = A * (q - m.a);
     }
     const double norm = r.head(rows).norm();
-    const double w = (norm <= huber_m_ ? 1.0 : huber_m_ / norm) / (lidar_sigma_m_ * lidar_sigma_m_);
+    const double w = (norm <= kHuberM ? 1.0 : kHuberM / norm) / (lidar_sigma_m_ * lidar_sigma_m_);
     const Eigen::Matrix3d AR = A * R;
     const Eigen::Matrix3d lever_hat = own >= 0 ? so3::hat(m.p_body - origin[m.source]) : Eigen::Matrix3d::Zero();
     const Eigen::Vector3d clock = w_body.cross(m.p_body) + v_body;
@@ -213,11 +248,11 @@ bool OnlineCalibration::observe(const Features& f, const Eigen::Isometry3d& T_wo
   const Eigen::MatrixXd H_calib = H.bottomRightCorner(n - kPose, n - kPose) - Hcp * Hpp_inv * Hcp.transpose();
   const Eigen::VectorXd b_calib = -(g.tail(n - kPose) - Hcp * Hpp_inv * g.head(kPose));
 
-  // Information form: the sweep measured the corrections beyond those applied (x_) when its points were placed.
+  // Information form: the sweep measured the corrections beyond the estimate its points were placed with.
   const double fade = last_ns_ == 0 ? 1.0 : std::exp(-toSec(stamp_ns - last_ns_) / cfg_.memory_s);
   const Eigen::MatrixXd prior = priorInfo();
   const Eigen::MatrixXd info = fade * info_ + (1.0 - fade) * prior + H_calib;
-  const Eigen::VectorXd info_x = fade * info_x_ + H_calib * x_ + b_calib;
+  const Eigen::VectorXd info_x = fade * info_x_ + H_calib * estimate_ + b_calib;
   const Eigen::VectorXd estimate = info.ldlt().solve(info_x);
   if (!estimate.allFinite()) return false;
   const Eigen::VectorXd prior_sigma = prior.diagonal().cwiseInverse().cwiseSqrt();

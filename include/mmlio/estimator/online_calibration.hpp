@@ -69,7 +69,7 @@ class OnlineCalibration {
   /// One entry per LiDAR of the odometry (its index is the features' source): refine[i] marks the
   /// refined ones, anchor the solid-state LiDAR they are refined against (-1: none, inactive).
   OnlineCalibration(OnlineCalibrationConfig cfg, std::vector<LidarExtrinsic> lidars, std::vector<char> refine,
-                    int anchor, double map_voxel_m, double lidar_sigma_m, double huber_m, double map_radius_m);
+                    int anchor, double map_voxel_m, double lidar_sigma_m, double map_radius_m);
 
   /// Features of each LiDAR a sweep hands over (the anchor's keyframes build the anchor map from
   /// them), and how many of those are matched per sweep.
@@ -98,6 +98,9 @@ class OnlineCalibration {
 
  private:
   Eigen::MatrixXd priorInfo() const;
+  /// f with each refined LiDAR's points moved from where the applied corrections placed them to
+  /// where the estimated ones do.
+  Features placedAtEstimate(Features f, const Eigen::Vector3d& v_body, const Eigen::Vector3d& w_body) const;
   void applyDetermined();
 
   static constexpr int kParams = 7;  // rotation 3, translation 3, clock 1
@@ -113,7 +116,7 @@ class OnlineCalibration {
   std::vector<char> refine_;
   int anchor_ = -1;
   bool active_ = false;
-  double lidar_sigma_m_, huber_m_, map_radius_m_;
+  double lidar_sigma_m_, map_radius_m_;
   Mat prior_info_ = Mat::Zero();  // of one refined LiDAR
   std::vector<Refined> refined_;
   Eigen::VectorXd x_;         // the corrections applied, kParams per refined LiDAR
