@@ -1,5 +1,7 @@
 #include "live_feeder.hpp"
 
+#include <cmath>
+
 #include "mmlio/config/calibration_source.hpp"
 #include "mmlio/config/source_options.hpp"
 #include "mmlio/core/error.hpp"
@@ -96,6 +98,20 @@ bool LiveFeeder::pushCdr(Encoded kind, std::size_t lidar, std::vector<std::uint8
 std::size_t LiveFeeder::droppedImu() const { return queue_.dropped(kImuClass); }
 std::size_t LiveFeeder::droppedScans() const { return queue_.dropped(kScanClass); }
 
+std::string LiveFeeder::hintPose(const geometry_msgs::PoseWithCovarianceStamped& msg) {
+  if (options_.session_dir.empty()) return "not localizing in a session: a pose hint has nothing to act on";
+  if (!msg.header.frame_id.empty() && msg.header.frame_id != options_.map_frame)
+    return "pose hint in frame '" + msg.header.frame_id + "', not the map frame '" + options_.map_frame + "'";
+  const geometry_msgs::Pose& p = msg.pose.pose;
+  for (const double v :
+       {p.position.x, p.position.y, p.position.z, p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w})
+    if (!std::isfinite(v)) return "pose hint with a non-finite value";
+  Message m;
+  m.pose_hint = msg;
+  if (!queue_.push(kRequestClass, std::move(m))) return "busy or shutting down: try again";
+  return "";
+}
+
 LiveFeeder::SaveResult LiveFeeder::save() {
   if (options_.out_dir.empty()) return {false, "out_dir is not set"};
   auto done = std::make_shared<std::promise<std::string>>();
@@ -147,6 +163,16 @@ void LiveFeeder::process(const Message& m) {
     save_due_ = false;
     const std::string error = writeOutputs();
     if (!error.empty()) log::error("autosave: ", error);
+  }
+  if (m.pose_hint) {
+    const Eigen::Isometry3d T_map_body = fromPose(m.pose_hint->pose.pose);
+    // rviz's "2D Pose Estimate" has z = 0: no height.
+    const bool with_height = m.pose_hint->pose.pose.position.z != 0.0;
+    system_.hintPose(T_map_body, with_height);
+    log::info("pose hint at (", T_map_body.translation().x(), ", ", T_map_body.translation().y(),
+              with_height ? ", " + std::to_string(T_map_body.translation().z()) : std::string(),
+              "): tried at the next keyframe");
+    return;
   }
   if (m.imu) return addImu(*m.imu);
   if (m.cloud) return addCloud(m.lidar, *m.cloud);
@@ -212,6 +238,8 @@ void LiveFeeder::onSweep(const estimator::SweepResult& r) {
   }
   if (outlet_.wantsScan()) outlet_.scan(toPointCloud2(r.points_body, T_odom_body, stamp_ns, options_.odom_frame));
   if (!r.keyframe) return;
+  if (const backend::LocalizationStatus* s = system_.localization())
+    outlet_.diagnostics(toDiagnostics(*s, r.state.stamp_ns, stamp_ns, "mmlio: localization"));
   if (last_save_ns_ == 0) last_save_ns_ = r.state.stamp_ns;
   if (!options_.out_dir.empty() && options_.autosave_period_s > 0 &&
       toSec(r.state.stamp_ns - last_save_ns_) >= options_.autosave_period_s) {

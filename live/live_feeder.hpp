@@ -7,6 +7,8 @@
 // message and counts it); ONE processing thread decodes, feeds the System and hands the messages
 // to the transport's Outlet. A slow sweep therefore never blocks the transport, and the System
 // sees its input in one order. The back end runs on the System's own thread.
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
@@ -17,6 +19,7 @@
 #include <cstddef>
 #include <future>
 #include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -73,6 +76,8 @@ class Outlet {
   virtual void path(const nav_msgs::Path& msg) = 0;
   virtual bool wantsMap() const = 0;
   virtual void map(const sensor_msgs::PointCloud2& msg) = 0;
+  /// While localizing in a session: its state, every keyframe.
+  virtual void diagnostics(const diagnostic_msgs::DiagnosticArray& msg) = 0;
 };
 
 class LiveFeeder {
@@ -95,6 +100,10 @@ class LiveFeeder {
   /// thread, so the transport's receive thread only queues it and never falls behind a burst.
   enum class Encoded { kImu, kPointCloud2, kLivox };
   bool pushCdr(Encoded kind, std::size_t lidar, std::vector<std::uint8_t> cdr);
+  /// While localizing in a session: an operator's "the rig is about here" (/initialpose, rviz's
+  /// "2D Pose Estimate"), in the map frame; tried at the next keyframe. Any thread. The reason it
+  /// was not taken, or "".
+  std::string hintPose(const geometry_msgs::PoseWithCovarianceStamped& msg);
   std::size_t droppedImu() const;
   std::size_t droppedScans() const;
 
@@ -118,7 +127,8 @@ class LiveFeeder {
     boost::shared_ptr<const sensor_msgs::PointCloud2> cloud;
     boost::shared_ptr<const io::LivoxCustomMsg> livox;
     std::shared_ptr<std::promise<std::string>> save;  // resolves to "" (written) or the error
-    std::size_t lidar = 0;                            // index into lidars_
+    std::optional<geometry_msgs::PoseWithCovarianceStamped> pose_hint;
+    std::size_t lidar = 0;  // index into lidars_
     std::vector<std::uint8_t> cdr;
     Encoded kind = Encoded::kImu;
   };

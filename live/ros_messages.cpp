@@ -128,4 +128,50 @@ nav_msgs::Path toPath(const Trajectory& trajectory, const std::string& frame_id)
   return path;
 }
 
+Eigen::Isometry3d fromPose(const geometry_msgs::Pose& pose) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(pose.position.x, pose.position.y, pose.position.z);
+  const Eigen::Quaterniond q(pose.orientation.w, pose.orientation.x, pose.orientation.y, pose.orientation.z);
+  if (q.norm() > 1e-6) T.linear() = q.normalized().toRotationMatrix();
+  return T;
+}
+
+diagnostic_msgs::DiagnosticArray toDiagnostics(const backend::LocalizationStatus& s, Stamp now_ns, Stamp stamp_ns,
+                                               const std::string& name) {
+  diagnostic_msgs::DiagnosticStatus d;
+  d.name = name;
+  const bool lost = !s.localized && !s.lost_spells.empty();
+  if (s.localized) {
+    d.level = diagnostic_msgs::DiagnosticStatus::OK;
+    d.message = "localized in the session map";
+  } else if (lost) {
+    d.level = diagnostic_msgs::DiagnosticStatus::ERROR;
+    d.message = "lost for " + std::to_string(static_cast<int>(toSec(now_ns - s.lost_spells.back().first))) +
+                " s: relocalizing (" + s.last_reason + ")";
+  } else {
+    d.level = diagnostic_msgs::DiagnosticStatus::WARN;
+    d.message = "not localized yet (" + s.last_reason + ")";
+  }
+  const auto add = [&d](const std::string& key, const std::string& value) {
+    diagnostic_msgs::KeyValue kv;
+    kv.key = key;
+    kv.value = value;
+    d.values.push_back(kv);
+  };
+  add("localized", s.localized ? "true" : "false");
+  add("first_localized_s_ago", s.first_localized_ns ? std::to_string(toSec(now_ns - *s.first_localized_ns)) : "never");
+  add("keyframes", std::to_string(s.keyframes));
+  add("keyframes_fitting_the_map", std::to_string(s.keyframes_fitted));
+  add("last_fitness_m", std::to_string(s.last_fitness_m));
+  add("last_overlap", std::to_string(s.last_overlap));
+  add("lost_spells", std::to_string(s.lost_spells.size()));
+  add("relocalizations", std::to_string(s.relocalizations));
+  add("pose_hints", std::to_string(s.pose_hints));
+  add("pose_hints_refuted", std::to_string(s.pose_hints_refuted));
+  diagnostic_msgs::DiagnosticArray out;
+  out.header.stamp = toRosTime(stamp_ns);
+  out.status.push_back(d);
+  return out;
+}
+
 }  // namespace mmlio::live

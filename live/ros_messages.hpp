@@ -1,5 +1,8 @@
 #pragma once
-// Core types -> the ROS messages the node publishes. Stateless, no estimation.
+// Core types -> the ROS messages the node publishes (and the pose hint it takes). Stateless, no
+// estimation.
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
@@ -11,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "mmlio/backend/map_localizer.hpp"
 #include "mmlio/core/types.hpp"
 #include "mmlio/estimator/degeneracy.hpp"
 
@@ -44,5 +48,13 @@ nav_msgs::Odometry toOdometry(const NavState& state, const Eigen::Isometry3d& T_
                               const std::string& child_frame_id);
 
 nav_msgs::Path toPath(const Trajectory& trajectory, const std::string& frame_id);
+
+Eigen::Isometry3d fromPose(const geometry_msgs::Pose& pose);
+
+/// A localization's state as /diagnostics carries it (rqt_robot_monitor): OK once localized, WARN
+/// while searching, ERROR when lost; its figures as key/values. now_ns in the estimator's time
+/// (the status's stamps), stamp_ns the message's.
+diagnostic_msgs::DiagnosticArray toDiagnostics(const backend::LocalizationStatus& s, Stamp now_ns, Stamp stamp_ns,
+                                               const std::string& name);
 
 }  // namespace mmlio::live

@@ -31,6 +31,8 @@ constexpr const char* kUsage =
     "config; publishes ~odometry (nav_msgs/Odometry), ~path (nav_msgs/Path, corrected by loops), tf\n"
     "map -> odom -> body, ~cloud_registered and ~map (sensor_msgs/PointCloud2); the ~save_map service\n"
     "(std_srvs/Trigger) writes trajectory.tum, map.pcd and report.json into ~out_dir, as does shutdown.\n"
+    "With ~session it localizes in that saved map: pose hints on /initialpose (rviz's 2D Pose Estimate),\n"
+    "its state on /diagnostics (diagnostic_msgs/DiagnosticArray).\n"
     "Needs a running ROS master (ROS_MASTER_URI). See ros/README.md.\n";
 
 struct NodeParams {
@@ -78,7 +80,8 @@ class RosOutlet : public live::Outlet {
       : odometry_(pnh.advertise<nav_msgs::Odometry>("odometry", 100)),
         path_(pnh.advertise<nav_msgs::Path>("path", 1, /*latch=*/true)),
         scan_(pnh.advertise<sensor_msgs::PointCloud2>("cloud_registered", 2)),
-        map_(pnh.advertise<sensor_msgs::PointCloud2>("map", 1, /*latch=*/true)) {}
+        map_(pnh.advertise<sensor_msgs::PointCloud2>("map", 1, /*latch=*/true)),
+        diagnostics_(ros::NodeHandle().advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10)) {}
 
   bool open() const override { return ros::ok(); }
   void odometry(const nav_msgs::Odometry& msg) override { odometry_.publish(msg); }
@@ -89,9 +92,10 @@ class RosOutlet : public live::Outlet {
   void path(const nav_msgs::Path& msg) override { path_.publish(msg); }
   bool wantsMap() const override { return map_.getNumSubscribers() > 0; }
   void map(const sensor_msgs::PointCloud2& msg) override { map_.publish(msg); }
+  void diagnostics(const diagnostic_msgs::DiagnosticArray& msg) override { diagnostics_.publish(msg); }
 
  private:
-  ros::Publisher odometry_, path_, scan_, map_;
+  ros::Publisher odometry_, path_, scan_, map_, diagnostics_;
   tf2_ros::TransformBroadcaster tf_;
 };
 
@@ -114,6 +118,15 @@ class Node {
         ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
     log::info("mode ", feeder_.mode(), ", IMU ", cfg.imu.topic, " (sensor_msgs/Imu, acc unit ", cfg.imu.acc_unit, ")");
     for (std::size_t i = 0; i < feeder_.lidars().size(); ++i) subscribeLidar(nh, i);
+    if (!params.feeder.session_dir.empty()) {
+      // Where rviz's "2D Pose Estimate" publishes.
+      subs_.push_back(nh.subscribe<geometry_msgs::PoseWithCovarianceStamped>(
+          "/initialpose", 2, [this](const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& m) {
+            const std::string refused = feeder_.hintPose(*m);
+            if (!refused.empty()) log::warn("/initialpose ignored: ", refused);
+          }));
+      log::info("localizing in ", params.feeder.session_dir, "; pose hints on /initialpose, status on /diagnostics");
+    }
   }
 
   void finish() { feeder_.finish(); }

@@ -21,6 +21,7 @@
 #include "mmlio/config/rig_config.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
+#include "mmlio/io/cdr_messages.hpp"
 #include "ros2_wire.hpp"
 
 namespace mmlio::ros2 {
@@ -53,7 +54,9 @@ class DdsOutlet : public live::Outlet {
         scan_(dds.writer(topicOnWire("/" + node + "/cloud_registered"), typeOnWire("sensor_msgs/msg/PointCloud2"),
                          reliableQos(2))),
         map_(dds.writer(topicOnWire("/" + node + "/map"), typeOnWire("sensor_msgs/msg/PointCloud2"), latchedQos())),
-        tf_(dds.writer(topicOnWire("/tf"), typeOnWire("tf2_msgs/msg/TFMessage"), reliableQos(100))) {}
+        tf_(dds.writer(topicOnWire("/tf"), typeOnWire("tf2_msgs/msg/TFMessage"), reliableQos(100))),
+        diagnostics_(dds.writer(topicOnWire("/diagnostics"), typeOnWire("diagnostic_msgs/msg/DiagnosticArray"),
+                                reliableQos(10))) {}
 
   void close() { open_ = false; }
   bool open() const override { return open_; }
@@ -70,10 +73,11 @@ class DdsOutlet : public live::Outlet {
   void path(const nav_msgs::Path& msg) override { path_.write(encode(msg)); }
   bool wantsMap() const override { return true; }
   void map(const sensor_msgs::PointCloud2& msg) override { map_.write(encode(msg)); }
+  void diagnostics(const diagnostic_msgs::DiagnosticArray& msg) override { diagnostics_.write(encode(msg)); }
 
  private:
   std::atomic<bool> open_{true};
-  DdsParticipant::Writer &odometry_, &path_, &scan_, &map_, &tf_;
+  DdsParticipant::Writer &odometry_, &path_, &scan_, &map_, &tf_, &diagnostics_;
 };
 
 /// Answers save_map requests on a thread of its own: saving waits for the processing thread, and
@@ -159,6 +163,18 @@ void subscribe(DdsParticipant& dds, live::LiveFeeder& feeder, const config::RigC
                [&feeder, i, kind](Cdr&& m) { feeder.pushCdr(kind, i, std::move(m)); });
     log::info("LiDAR '", l.name, "' on ", l.topic, " (", type, ")");
   }
+  if (o.feeder.session_dir.empty()) return;
+  // Where rviz2's "2D Pose Estimate" publishes.
+  dds.reader(topicOnWire("/initialpose"), typeOnWire("geometry_msgs/msg/PoseWithCovarianceStamped"),
+             Qos{false, false, 2}, [&feeder](Cdr&& m) {
+               try {
+                 const std::string refused = feeder.hintPose(io::decodePoseWithCovarianceStampedCdr(m));
+                 if (!refused.empty()) log::warn("/initialpose ignored: ", refused);
+               } catch (const std::exception& e) {
+                 log::warn("/initialpose ignored: ", e.what());
+               }
+             });
+  log::info("localizing in ", o.feeder.session_dir, "; pose hints on /initialpose, status on /diagnostics");
 }
 
 int run(const Options& o, const sigset_t& stop_signals) {

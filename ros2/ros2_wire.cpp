@@ -151,6 +151,18 @@ Cdr encode(const tf2_msgs::TFMessage& msg) {
   return w.take();
 }
 
+Cdr encode(const diagnostic_msgs::DiagnosticArray& msg) {
+  CdrWriter w;
+  w.header(msg.header);
+  w << static_cast<std::uint32_t>(msg.status.size());
+  for (const auto& d : msg.status) {
+    w << static_cast<std::uint8_t>(d.level) << d.name << d.message << d.hardware_id
+      << static_cast<std::uint32_t>(d.values.size());
+    for (const auto& kv : d.values) w << kv.key << kv.value;
+  }
+  return w.take();
+}
+
 Cdr encodeTriggerReply(bool success, const std::string& message) {
   CdrWriter w;
   w << success << message;

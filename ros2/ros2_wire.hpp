@@ -11,6 +11,7 @@
 // The messages come in as the ROS 1 structs the ROS 1 node fills (live/ros_messages.hpp makes them
 // from the estimator's state): the two distributions share every field the node publishes but the
 // header, whose ROS 2 form has no seq and an int32 sec.
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -38,6 +39,7 @@ Cdr encode(const nav_msgs::Odometry& msg);
 Cdr encode(const nav_msgs::Path& msg);
 Cdr encode(const sensor_msgs::PointCloud2& msg);
 Cdr encode(const tf2_msgs::TFMessage& msg);
+Cdr encode(const diagnostic_msgs::DiagnosticArray& msg);
 /// std_srvs/srv/Trigger's reply.
 Cdr encodeTriggerReply(bool success, const std::string& message);
 

@@ -10,8 +10,9 @@ PACKAGES=(
   zlib1g-dev libsqlite3-dev libzstd-dev liblz4-dev libfastcdr-dev libfastrtps-dev
   cyclonedds-dev cyclonedds-tools
   librosbag-storage-dev pluginlib-dev libroscpp-dev libsensor-msgs-dev libstd-msgs-dev
-  libgeometry-msgs-dev libnav-msgs-dev libtf2-ros-dev libtf2-msgs-dev libstd-srvs-dev
+  libgeometry-msgs-dev libnav-msgs-dev libtf2-ros-dev libtf2-msgs-dev libstd-srvs-dev libdiagnostic-msgs-dev
   ros-core python3-rosbag python3-sensor-msgs python3-nav-msgs python3-tf2-msgs python3-std-srvs
+  python3-diagnostic-msgs
   python3
   parallel bc
   clang-format clang-tidy

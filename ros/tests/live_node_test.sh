@@ -104,14 +104,23 @@ finish()
 PY
 
 # Localizing live in the session `mmlio run` left (the same bag): the node finds itself at once, its
-# poses are the session's map frame's, and its report says so.
+# poses are the session's map frame's, and its report says so; its state is on /diagnostics, and a
+# pose hint 50 m off (rviz's "2D Pose Estimate" on /initialpose, outside the building) is refuted
+# without moving it.
 stdbuf -oL -eL "$NODE" __name:=mmlio_loc _config:="$CONFIG_DIR/hvi.yaml" _calib:="$truth" _out_dir:="$work/loc" \
   _session:="$work/run/session" > "$work/loc_node.log" 2>&1 &
 loc_pid=$!
 pids+=($loc_pid)
 wait_for 30 rostopic info /mmlio_loc/odometry || fail "the localizing node never advertised its odometry"
+rostopic echo /diagnostics > "$work/diagnostics.txt" 2> /dev/null &
+echo_pid=$!
+pids+=($echo_pid)
+(sleep 8 && rostopic pub -1 /initialpose geometry_msgs/PoseWithCovarianceStamped \
+  '{header: {frame_id: map}, pose: {pose: {position: {x: 50.0, y: 0.0, z: 0.0}, orientation: {w: 1.0}}}}' \
+  > "$work/initialpose.log" 2>&1) &
 rosbag play -q --wait-for-subscribers "$bag" > "$work/play_loc.log" 2>&1 || fail "rosbag play (localize)"
 sleep 3
+kill "$echo_pid" 2> /dev/null || true
 stop_node "$loc_pid"
 python3 - "$work" << 'PY' || fail "localization checks above"
 import json, sys
@@ -121,7 +130,12 @@ work = sys.argv[1]
 loc = json.load(open(f"{work}/loc/report.json")).get("localization", {})
 check(loc.get("localized") is True, f"the node localized in the session ({loc.get('last_reason')})")
 check(0 <= loc.get("first_localized_s", -1) < 3, f"within 3 s of its first message ({loc.get('first_localized_s')} s)")
-check_in_session_frame(work, "loc", "in the session's map frame")
+check(loc.get("pose_hints") == 1 and loc.get("pose_hints_refuted") == 1 and loc.get("localized_at_end") is True,
+      f"the hint 50 m off was taken and refuted ({loc.get('pose_hints')}, {loc.get('pose_hints_refuted')})")
+check_in_session_frame(work, "loc", "in the session's map frame, the hint notwithstanding")
+diagnostics = open(f"{work}/diagnostics.txt").read()
+check('name: "mmlio: localization"' in diagnostics and "level: 0" in diagnostics,
+      "/diagnostics carried the localization, OK once localized")
 finish()
 PY
 

@@ -181,5 +181,32 @@ TEST(RosMessages, TransformAndPathCarryPosesInTheirFrames) {
   EXPECT_DOUBLE_EQ(path.poses[1].pose.position.x, 1.0);
 }
 
+TEST(RosMessages, APoseReadsBackAsTheTransformItCameFrom) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(-1.2, Eigen::Vector3d(0.2, 0.1, 1).normalized()).toRotationMatrix();
+  T.translation() = Eigen::Vector3d(4, -5, 0.5);
+  EXPECT_TRUE(fromPose(toPose(T)).isApprox(T, 1e-12));
+  geometry_msgs::Pose zero;  // an all-zero quaternion (a hand-typed message): no rotation
+  zero.orientation.w = 0.0;
+  EXPECT_TRUE(fromPose(zero).isApprox(Eigen::Isometry3d::Identity()));
+}
+
+TEST(RosMessages, DiagnosticsSayOkWhenLocalizedWarnBeforeAndErrorWhenLost) {
+  backend::LocalizationStatus s;
+  s.last_reason = "ambiguous";
+  const auto level = [&](Stamp now) { return toDiagnostics(s, now, now, "mmlio: localization").status.at(0).level; };
+  EXPECT_EQ(level(1'000'000'000), diagnostic_msgs::DiagnosticStatus::WARN);
+  s.localized = true;
+  s.first_localized_ns = 1'000'000'000;
+  EXPECT_EQ(level(2'000'000'000), diagnostic_msgs::DiagnosticStatus::OK);
+  s.localized = false;
+  s.lost_spells.emplace_back(3'000'000'000, 0);
+  const diagnostic_msgs::DiagnosticArray lost = toDiagnostics(s, 10'000'000'000, 10'000'000'000, "mmlio: localization");
+  EXPECT_EQ(lost.status.at(0).level, diagnostic_msgs::DiagnosticStatus::ERROR);
+  EXPECT_EQ(lost.status.at(0).name, "mmlio: localization");
+  EXPECT_NE(lost.status.at(0).message.find("lost for 7 s"), std::string::npos) << lost.status.at(0).message;
+  EXPECT_EQ(lost.header.stamp.toNSec(), 10'000'000'000u);
+}
+
 }  // namespace
 }  // namespace mmlio::live

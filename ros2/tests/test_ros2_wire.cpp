@@ -132,4 +132,43 @@ TEST(Ros2Wire, TransformsAndTriggerRepliesHaveTheirRos2Size) {
   EXPECT_EQ(u32At(reply, 8), 6u);
 }
 
+TEST(Ros2Wire, DiagnosticsAndAPoseHintHaveRos2sLayout) {
+  diagnostic_msgs::DiagnosticArray diag;  // body: time 8, frame "" 4 + 1 -> 13, aligned to 4: 16
+  diagnostic_msgs::DiagnosticStatus d;
+  d.level = diagnostic_msgs::DiagnosticStatus::ERROR;  // status count at 16, level (octet) at 20
+  d.name = "mmlio";                                    // aligned to 4: length at 24, "mmlio\0" to 34
+  d.values.resize(1);
+  d.values[0].key = "k";
+  d.values[0].value = "v";
+  diag.status.push_back(d);
+  const Cdr cdr = encode(diag);
+  EXPECT_EQ(u32At(cdr, 4 + 16), 1u);
+  EXPECT_EQ(cdr[4 + 20], diagnostic_msgs::DiagnosticStatus::ERROR);
+  EXPECT_EQ(u32At(cdr, 4 + 24), 6u);
+  // message "" at 36 (4 + 1 -> 41), hardware_id "" at 44 (-> 49), values count at 52, key at 56
+  // (4 + 2 -> 62), value at 64 (4 + 2 -> 70).
+  EXPECT_EQ(u32At(cdr, 4 + 52), 1u);
+  EXPECT_EQ(cdr.size(), 4u + 70u);
+
+  // geometry_msgs/msg/PoseWithCovarianceStamped as rviz2 sends it: header (time 8, "map" 4 + 4 ->
+  // 16), position at 16, orientation at 40, covariance (36 doubles) at 72, end at 360.
+  Cdr hint(4 + 360, 0);
+  hint[1] = 1;  // CDR little endian
+  const std::uint32_t frame_length = 4;
+  std::memcpy(hint.data() + 4 + 8, &frame_length, 4);
+  std::memcpy(hint.data() + 4 + 12, "map", 4);
+  const double pose[7] = {1.5, -2.0, 0.0, 0.0, 0.0, 0.7071067811865476, 0.7071067811865476};
+  std::memcpy(hint.data() + 4 + 16, pose, sizeof pose);
+  const double variance = 0.25;
+  std::memcpy(hint.data() + 4 + 72, &variance, 8);
+  const geometry_msgs::PoseWithCovarianceStamped m = io::decodePoseWithCovarianceStampedCdr(hint);
+  EXPECT_EQ(m.header.frame_id, "map");
+  EXPECT_DOUBLE_EQ(m.pose.pose.position.x, 1.5);
+  EXPECT_DOUBLE_EQ(m.pose.pose.position.y, -2.0);
+  EXPECT_DOUBLE_EQ(m.pose.pose.orientation.w, pose[6]);
+  EXPECT_DOUBLE_EQ(m.pose.covariance[0], 0.25);
+  hint.resize(100);
+  EXPECT_THROW(io::decodePoseWithCovarianceStampedCdr(hint), std::exception);
+}
+
 }  // namespace mmlio::ros2

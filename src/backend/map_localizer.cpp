@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "mmlio/core/log.hpp"
 
@@ -19,29 +20,51 @@ std::vector<Eigen::Vector3d> mapPoints(const Session& session, double voxel_m) {
 
 MapLocalizer::MapLocalizer(const Session& session, MapLocalizerConfig cfg,
                            std::optional<Eigen::Isometry3d> initial_pose)
-    : cfg_(std::move(cfg)),
-      initial_pose_(std::move(initial_pose)),
+    : session_(&session),
+      cfg_(std::move(cfg)),
+      pending_hint_(std::move(initial_pose)),
       relocalizer_(session, cfg_.relocalization),
       map_(mapPoints(session, cfg_.map_voxel_m)) {}
 
 void MapLocalizer::addKeyframe(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body,
                                const std::vector<Eigen::Vector3d>& cloud_body) {
   ++status_.keyframes;
-  if (initial_pose_ && !T_map_odom_hint_) T_map_odom_hint_ = *initial_pose_ * T_odom_body.inverse();
   recent_.push_back({T_odom_body, cloud_body});
   while (static_cast<int>(recent_.size()) > std::max(1, cfg_.relocalize_keyframes)) recent_.pop_front();
+  if (pending_hint_) {
+    T_map_odom_hint_ = *pending_hint_ * T_odom_body.inverse();
+    pending_hint_.reset();
+    const bool was_localized = status_.localized;
+    if (relocalize(stamp_ns, T_odom_body, cloud_body) || !was_localized) return;
+    ++status_.pose_hints_refuted;
+    T_map_odom_hint_.reset();  // tracking goes on in the map <- odom it had
+    log::warn("the pose hint does not fit the session map there (", status_.last_reason, "): tracking goes on");
+  }
   if (status_.localized)
     track(stamp_ns, T_odom_body, cloud_body);
   else if (since_attempt_++ % std::max(1, cfg_.relocalize_every) == 0)
     relocalize(stamp_ns, T_odom_body, cloud_body);
 }
 
-void MapLocalizer::relocalize(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body,
+void MapLocalizer::hint(const Eigen::Isometry3d& T_map_body, bool with_height) {
+  pending_hint_ = T_map_body;
+  ++status_.pose_hints;
+  if (with_height) return;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const SessionKeyframe& k : session_->keyframes) {
+    const double d = (k.T_map_body.translation() - T_map_body.translation()).head<2>().norm();
+    if (d >= nearest) continue;
+    nearest = d;
+    pending_hint_->translation().z() = k.T_map_body.translation().z();
+  }
+}
+
+bool MapLocalizer::relocalize(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body,
                               const std::vector<Eigen::Vector3d>& cloud) {
   ++status_.relocalization_attempts;
-  // A hint only for the first finding: once lost, the old map <- odom is what went wrong.
+  // A hint until the rig is found (once lost, the old map <- odom is what went wrong: no hint).
   std::optional<Eigen::Isometry3d> hint;
-  if (T_map_odom_hint_ && !status_.first_localized_ns) hint = *T_map_odom_hint_ * T_odom_body;
+  if (T_map_odom_hint_) hint = *T_map_odom_hint_ * T_odom_body;
   std::vector<Eigen::Vector3d> walked;  // the latest keyframes in this one's frame
   const Eigen::Isometry3d T_body_odom = T_odom_body.inverse();
   for (const Recent& k : recent_) {
@@ -53,9 +76,11 @@ void MapLocalizer::relocalize(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_bo
   status_.last_reason = r.reason;
   if (!r.localized) {
     log::debug("relocalization: ", r.reason);
-    return;
+    return false;
   }
   corrections_.emplace_back(stamp_ns, r.T_map_body * T_odom_body.inverse());
+  T_map_odom_hint_.reset();
+  const bool was_localized = status_.localized;
   status_.localized = true;
   status_.last_fitness_m = r.fitness_m;
   status_.last_overlap = r.overlap;
@@ -64,12 +89,15 @@ void MapLocalizer::relocalize(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_bo
   if (!status_.first_localized_ns) {
     status_.first_localized_ns = stamp_ns;
     log::emit(log::Level::kInfo, "localized in the session map: ", r.reason);
+  } else if (was_localized) {
+    log::emit(log::Level::kInfo, "localized at the pose hint: ", r.reason);
   } else {
     ++status_.relocalizations;
     if (!status_.lost_spells.empty() && status_.lost_spells.back().second == 0)
       status_.lost_spells.back().second = stamp_ns;
     log::emit(log::Level::kInfo, "localized again: ", r.reason);
   }
+  return true;
 }
 
 void MapLocalizer::track(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body,

@@ -154,4 +154,22 @@ LivoxCustomMsg decodeLivoxCdr(const std::vector<std::uint8_t>& cdr) {
   });
 }
 
+geometry_msgs::PoseWithCovarianceStamped decodePoseWithCovarianceStampedCdr(const std::vector<std::uint8_t>& cdr) {
+  return decodeOrExplain(cdr, "geometry_msgs/msg/PoseWithCovarianceStamped", [&] {
+    CdrReader in(cdr);
+    geometry_msgs::PoseWithCovarianceStamped m;
+    m.header = in.header();
+    geometry_msgs::Pose& p = m.pose.pose;
+    p.position.x = in.get<double>();
+    p.position.y = in.get<double>();
+    p.position.z = in.get<double>();
+    p.orientation.x = in.get<double>();
+    p.orientation.y = in.get<double>();
+    p.orientation.z = in.get<double>();
+    p.orientation.w = in.get<double>();
+    in.array(m.pose.covariance.data(), 36);
+    return m;
+  });
+}
+
 }  // namespace mmlio::io

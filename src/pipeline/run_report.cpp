@@ -172,6 +172,8 @@ Json toJson(const RunReport& r) {
                            {"first_localized_s", l.first_localized_s},
                            {"relocalizations", l.relocalizations},
                            {"relocalization_attempts", l.relocalization_attempts},
+                           {"pose_hints", l.pose_hints},
+                           {"pose_hints_refuted", l.pose_hints_refuted},
                            {"keyframes", l.keyframes},
                            {"keyframes_fitting_the_map", l.keyframes_fitted},
                            {"keyframes_degenerate", l.keyframes_degenerate},

@@ -49,6 +49,12 @@ void System::localizeIn(std::shared_ptr<const Session> session, const std::strin
   localizer_ = std::make_unique<backend::MapLocalizer>(*session_, backend::MapLocalizerConfig(), initial_pose);
 }
 
+bool System::hintPose(const Eigen::Isometry3d& T_map_body, bool with_height) {
+  if (!localizer_) return false;
+  localizer_->hint(T_map_body, with_height);
+  return true;
+}
+
 void System::onSweep(estimator::SweepResult r) {
   if (r.status == estimator::SweepResult::Status::kInitializing) {
     ++sweeps_.initialising;
@@ -237,6 +243,8 @@ void System::reportLocalization(RunReport* r) const {
   l.first_localized_s = s.first_localized_ns ? since_start(*s.first_localized_ns) : -1.0;
   l.relocalizations = s.relocalizations;
   l.relocalization_attempts = s.relocalization_attempts;
+  l.pose_hints = s.pose_hints;
+  l.pose_hints_refuted = s.pose_hints_refuted;
   l.keyframes = s.keyframes;
   l.keyframes_fitted = s.keyframes_fitted;
   l.keyframes_degenerate = s.keyframes_degenerate;

@@ -87,6 +87,36 @@ TEST(MapLocalizer, AnInitialPoseHintSettlesWhatTheFirstSweepCannot) {
   EXPECT_LT(errorM(with, fromSec(1), T_odom_map * start, start), 0.05);
 }
 
+// An operator's pose hint mid-run (rviz's "2D Pose Estimate" on /initialpose, a metre and 20 deg off,
+// without height): where the sweep alone is ambiguous it finds the rig at the next keyframe; a hint
+// the map refutes (50 m off, outside the building) leaves the tracking as it was.
+TEST(MapLocalizer, APoseHintFindsTheRigAtTheNextKeyframeAndARefutedOneChangesNothing) {
+  const Session session = roomASession();
+  const Eigen::Isometry3d T_odom_map = pose(2.0, -1.0, 0, 35 * kDeg);
+  const Eigen::Isometry3d start = route()[0] * pose(0.3, 0.8, 0.1, 170 * kDeg);
+  MapLocalizer localizer(session);
+  localizer.addKeyframe(fromSec(1), T_odom_map * start, sweep(start, 500));
+  ASSERT_FALSE(localizer.status().localized);  // the half-turn twin fits nearly as well
+  // A 2D pose (rviz's) has no height: its z, 5 m under the rig here, says nothing.
+  Eigen::Isometry3d flat = start * pose(0.8, -0.5, 0, 20 * kDeg);
+  flat.translation().z() = -4.0;
+  localizer.hint(flat, false);
+  const Eigen::Isometry3d next = route()[1] * pose(0.3, 0.8, 0.1, 170 * kDeg);
+  localizer.addKeyframe(fromSec(2), T_odom_map * next, sweep(next, 501));
+  ASSERT_TRUE(localizer.status().localized) << localizer.status().last_reason;
+  EXPECT_LT(errorM(localizer, fromSec(2), T_odom_map * next, next), 0.05);
+
+  localizer.hint(next * pose(50.0, 0, 0, 0));
+  const Eigen::Isometry3d third = route()[2] * pose(0.3, 0.8, 0.1, 170 * kDeg);
+  localizer.addKeyframe(fromSec(3), T_odom_map * third, sweep(third, 502));
+  const LocalizationStatus& s = localizer.status();
+  EXPECT_TRUE(s.localized);
+  EXPECT_EQ(s.pose_hints, 2);
+  EXPECT_EQ(s.pose_hints_refuted, 1);
+  EXPECT_EQ(s.keyframes_fitted, 1);  // the third keyframe was tracked as usual
+  EXPECT_LT(errorM(localizer, fromSec(3), T_odom_map * third, third), 0.05);
+}
+
 TEST(MapLocalizer, ANeverFoundRunHasNoPoseInTheMap) {
   const Session session = roomASession();
   MapLocalizer localizer(session);

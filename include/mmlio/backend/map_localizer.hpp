@@ -5,7 +5,9 @@
 // session map from where map <- odom predicts it; a well-conditioned, close alignment updates
 // map <- odom, a degenerate one (a corridor) leaves it as it was, and a run of keyframes that do
 // not fit the map (a part of the building not mapped, a wrong correction, a kidnapped robot) means
-// lost: relocalization again, and the spell is counted.
+// lost: relocalization again, and the spell is counted. A pose hint (rviz's "2D Pose Estimate", an
+// operator's "the robot is here") is tried at the next keyframe whether localized or not: verified
+// like any relocalization, it replaces map <- odom; refuted, tracking goes on as it was.
 #include <Eigen/Geometry>
 #include <deque>
 #include <optional>
@@ -40,6 +42,7 @@ struct LocalizationStatus {
   std::optional<Stamp> first_localized_ns;  // none: never
   int relocalizations = 0;                  // found again after being lost
   int keyframes = 0, keyframes_fitted = 0, keyframes_degenerate = 0, relocalization_attempts = 0;
+  int pose_hints = 0, pose_hints_refuted = 0;  // given after the start (hint()), and not confirmed by the map
   double last_fitness_m = 0, last_overlap = 0;
   std::vector<std::pair<Stamp, Stamp>> lost_spells;  // [from, to); to = 0 while still lost
   std::string last_reason;
@@ -57,6 +60,11 @@ class MapLocalizer {
   void addKeyframe(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body,
                    const std::vector<Eigen::Vector3d>& cloud_body);
 
+  /// The rig is roughly at T_map_body now: tried at the next keyframe, and on every attempt after it
+  /// until the rig is found. Without height (a 2D pose, as rviz sends), the height is that of the
+  /// session keyframe nearest in x and y.
+  void hint(const Eigen::Isometry3d& T_map_body, bool with_height = true);
+
   const LocalizationStatus& status() const { return status_; }
   /// map <- odom in force at t: the latest correction at or before t, the first one before it
   /// (the odometry before the first localization is in the same frame). Empty before any.
@@ -66,12 +74,14 @@ class MapLocalizer {
   Trajectory inMap(const Trajectory& odometry) const;
 
  private:
-  void relocalize(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body, const std::vector<Eigen::Vector3d>& cloud);
+  /// Whether it found the rig.
+  bool relocalize(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body, const std::vector<Eigen::Vector3d>& cloud);
   void track(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body, const std::vector<Eigen::Vector3d>& cloud);
 
+  const Session* session_;
   MapLocalizerConfig cfg_;
-  std::optional<Eigen::Isometry3d> initial_pose_;
-  std::optional<Eigen::Isometry3d> T_map_odom_hint_;  // from the initial pose and the first keyframe
+  std::optional<Eigen::Isometry3d> pending_hint_;     // T_map_body, not yet tried
+  std::optional<Eigen::Isometry3d> T_map_odom_hint_;  // from the hint and the keyframe after it, until found
   LocalizationStatus status_;
   Relocalizer relocalizer_;
   IcpTarget map_;

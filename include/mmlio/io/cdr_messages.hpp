@@ -3,6 +3,7 @@
 // reader fills, so that every decoder and check behind them is shared: by the ROS 2 bag reader and the ROS 2 node.
 // Layouts are the ROS 2 IDL ones: builtin_interfaces/Time is int32 sec + uint32 nanosec, and fields are aligned to
 // their size counted from the end of the 4-byte encapsulation header.
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <sensor_msgs/Imu.h>
 #include <sensor_msgs/PointCloud2.h>
 
@@ -25,5 +26,7 @@ Ros2Type ros2Type(const std::string& type);
 sensor_msgs::Imu decodeImuCdr(const std::vector<std::uint8_t>& cdr);
 sensor_msgs::PointCloud2 decodePointCloud2Cdr(const std::vector<std::uint8_t>& cdr);
 LivoxCustomMsg decodeLivoxCdr(const std::vector<std::uint8_t>& cdr);
+/// What rviz2's "2D Pose Estimate" publishes on /initialpose.
+geometry_msgs::PoseWithCovarianceStamped decodePoseWithCovarianceStampedCdr(const std::vector<std::uint8_t>& cdr);
 
 }  // namespace mmlio::io

@@ -98,6 +98,7 @@ struct RunReport {
     bool localized_at_end = false;  // and was not lost at the end
     double first_localized_s = -1;  // seconds from the first IMU sample; -1: never
     int relocalizations = 0, relocalization_attempts = 0;
+    int pose_hints = 0, pose_hints_refuted = 0;  // given while running (/initialpose), and not confirmed
     int keyframes = 0, keyframes_fitted = 0, keyframes_degenerate = 0;
     double last_fitness_m = 0, last_overlap = 0;
     std::vector<std::pair<double, double>> lost_s;  // spells, seconds from the first IMU sample (end -1: still)

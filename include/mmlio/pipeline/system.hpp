@@ -55,6 +55,12 @@ class System {
   /// initial_pose: T_map_body at the start, roughly, or none.
   void localizeIn(std::shared_ptr<const Session> session, const std::string& session_dir,
                   const std::optional<Eigen::Isometry3d>& initial_pose = std::nullopt);
+  /// While localizing: the rig is roughly at T_map_body now (an operator's hint, rviz's "2D Pose
+  /// Estimate"), tried at the next keyframe (without height: see MapLocalizer::hint). False when
+  /// not localizing.
+  bool hintPose(const Eigen::Isometry3d& T_map_body, bool with_height = true);
+  /// While localizing, where it stands; null otherwise.
+  const backend::LocalizationStatus* localization() const { return localizer_ ? &localizer_->status() : nullptr; }
   /// End of the stream: the sweeps still waiting for IMU are processed.
   void flush() { online_.flush(); }
   /// Waits for the back end and runs its final loop check. A failing back end is logged and
