@@ -97,40 +97,53 @@ void encodeValue(double value, const PcdField& f, char* out) {
 }  // namespace
 
 void writePcdFieldsBinary(const std::string& path, const PcdCloud& cloud) {
-  const auto& fields = cloud.header.fields;
-  if (fields.size() != cloud.fields.size() || fields.size() != cloud.columns.size())
+  if (cloud.header.fields.size() != cloud.fields.size() || cloud.fields.size() != cloud.columns.size())
     throw Error("writing PCD '" + path + "': header.fields, fields and columns differ in length");
-  for (std::size_t i = 0; i < fields.size(); ++i) {
-    const PcdField& f = fields[i];
+  for (std::size_t i = 0; i < cloud.fields.size(); ++i) {
+    if (cloud.header.fields[i].name != cloud.fields[i])
+      throw Error("writing PCD '" + path + "': field '" + cloud.header.fields[i].name + "' must match its column");
+    if (cloud.columns[i].size() != cloud.size())
+      throw Error("writing PCD '" + path + "': column '" + cloud.fields[i] + "' has a different length");
+  }
+  std::size_t p = 0;
+  writePcdFieldsBinary(path, cloud.header.fields, cloud.size(), [&](double* values) {
+    for (std::size_t i = 0; i < cloud.columns.size(); ++i) values[i] = cloud.columns[i][p];
+    ++p;
+  });
+}
+
+void writePcdFieldsBinary(const std::string& path, const std::vector<PcdField>& fields, std::size_t points,
+                          const std::function<void(double* values)>& row) {
+  for (const PcdField& f : fields) {
     const bool ok_type =
         (f.type == 'F' && (f.size == 4 || f.size == 8)) ||
         ((f.type == 'U' || f.type == 'I') && (f.size == 1 || f.size == 2 || f.size == 4 || f.size == 8));
-    if (f.name != cloud.fields[i] || f.count != 1 || !ok_type)
-      throw Error("writing PCD '" + path + "': field '" + f.name +
-                  "' must match its column, COUNT 1, TYPE F4/F8/U*/I*");
-    if (cloud.columns[i].size() != cloud.size())
-      throw Error("writing PCD '" + path + "': column '" + f.name + "' has a different length");
+    if (f.count != 1 || !ok_type)
+      throw Error("writing PCD '" + path + "': field '" + f.name + "' must be COUNT 1, TYPE F4/F8/U*/I*");
   }
-  const std::size_t n = cloud.size();
   std::string names, sizes, types, counts;
+  std::size_t step = 0;
   for (const auto& f : fields) {
     names += " " + f.name;
     sizes += " " + std::to_string(f.size);
     types += std::string(" ") + f.type;
     counts += " 1";
+    step += static_cast<std::size_t>(f.size);
   }
   writeFileAtomically(path, [&](std::ostream& out) {
     out << "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS" << names << "\nSIZE" << sizes << "\nTYPE"
-        << types << "\nCOUNT" << counts << "\nWIDTH " << n << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << n
-        << "\nDATA binary\n";
-    std::vector<char> row(cloud.header.pointStepBytes());
-    for (std::size_t p = 0; p < n; ++p) {
+        << types << "\nCOUNT" << counts << "\nWIDTH " << points << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS "
+        << points << "\nDATA binary\n";
+    std::vector<char> bytes(step);
+    std::vector<double> values(fields.size());
+    for (std::size_t p = 0; p < points; ++p) {
+      row(values.data());
       std::size_t offset = 0;
       for (std::size_t i = 0; i < fields.size(); ++i) {
-        encodeValue(cloud.columns[i][p], fields[i], row.data() + offset);
+        encodeValue(values[i], fields[i], bytes.data() + offset);
         offset += static_cast<std::size_t>(fields[i].size);
       }
-      out.write(row.data(), static_cast<std::streamsize>(row.size()));
+      out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     }
   });
 }

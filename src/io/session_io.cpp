@@ -116,17 +116,19 @@ void writeInto(const fs::path& dir, const Session& s, const SessionInfo& info) {
       os << '\n';
     }
   });
-  PcdCloud clouds;
-  clouds.header.fields = {{"x", 4, 'F', 1}, {"y", 4, 'F', 1}, {"z", 4, 'F', 1}, {"keyframe", 4, 'U', 1}};
-  clouds.fields = {"x", "y", "z", "keyframe"};
-  clouds.columns.assign(4, {});
-  for (auto& c : clouds.columns) c.reserve(cloud_points);
-  for (std::size_t i = 0; i < s.keyframes.size(); ++i)
-    for (const Eigen::Vector3d& p : s.keyframes[i].cloud_body) {
-      for (int a = 0; a < 3; ++a) clouds.columns[static_cast<std::size_t>(a)].push_back(static_cast<float>(p[a]));
-      clouds.columns[3].push_back(static_cast<double>(i));
-    }
-  writePcdFieldsBinary((dir / "keyframe_clouds.pcd").string(), clouds);
+  // Row by row from the keyframes: a hall's clouds are millions of points.
+  std::size_t keyframe = 0, point = 0;
+  writePcdFieldsBinary((dir / "keyframe_clouds.pcd").string(),
+                       {{"x", 4, 'F', 1}, {"y", 4, 'F', 1}, {"z", 4, 'F', 1}, {"keyframe", 4, 'U', 1}}, cloud_points,
+                       [&](double* values) {
+                         while (point >= s.keyframes[keyframe].cloud_body.size()) {
+                           ++keyframe;
+                           point = 0;
+                         }
+                         const Eigen::Vector3d& p = s.keyframes[keyframe].cloud_body[point++];
+                         for (int a = 0; a < 3; ++a) values[a] = static_cast<float>(p[a]);
+                         values[3] = static_cast<double>(keyframe);
+                       });
   writePcdBinary((dir / "map.pcd").string(), s.map);
 }
 

@@ -18,6 +18,12 @@ namespace mmlio::pipeline {
 
 namespace {
 
+/// The process's resident memory high-water mark so far, MB (0 if unknown).
+double peakRssMb() {
+  rusage usage{};
+  return getrusage(RUSAGE_SELF, &usage) == 0 ? usage.ru_maxrss / 1024.0 : 0.0;  // KiB on Linux
+}
+
 /// The back end keeps keyframe clouds for loop closure, and for the session a later run relocalizes in.
 backend::MappingConfig mappingConfig(const config::RigConfig& cfg) {
   backend::MappingConfig m = cfg.mapping;
@@ -225,8 +231,7 @@ RunReport System::report(Stamp stream_end_ns, const TrustLimits& limits) const {
   r.memory.sweeps_waiting_for_imu_max = online_.waitingHighWater();
   r.memory.mapping_queue_max = mapping_.queueHighWater();
   r.memory.mapping_queue_capacity = mapping_.capacity();
-  rusage usage{};
-  if (getrusage(RUSAGE_SELF, &usage) == 0) r.memory.peak_rss_mb = usage.ru_maxrss / 1024.0;  // KiB on Linux
+  r.memory.peak_rss_mb = peakRssMb();
   judgeTrust(&r, stream_end_ns > 0 ? stream_end_ns : odometry().lastImuNs(), limits);
   if (localizer_) reportLocalization(&r);
   return r;
@@ -336,14 +341,15 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
   }
   if (cfg_.output.write_session && !localizer_) {
     for (SessionKeyframe& k : session.keyframes) k.stamp_ns = online_.externalStamp(k.stamp_ns);
-    session.map = map_points;
+    session.map = std::move(map_points);  // the page below reads it from there: a hall's map is 80 MB
     out.session = dir + "session";
     out.session_keyframes = session.keyframes.size();
     io::writeSession(out.session, session,
                      {io::kSessionFormatVersion, report.run.mmlio_version, report.run.commit, report.input.mode,
                       report.run.config_yaml});
   }
-  writeReports(dir, report, trajectory, map_points, gt_path);
+  report.memory.peak_rss_mb = peakRssMb();  // with the map's assembly and the session's writing
+  writeReports(dir, report, trajectory, session.map.empty() ? map_points : session.map, gt_path);
   return report;
 }
 

@@ -10,6 +10,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -61,6 +62,10 @@ void writePcdBinary(const std::string& path, const std::vector<Point>& points);
 /// from double, integers rounded). Width = size(), height 1. E.g. a scan with ring (U2) and time
 /// (F4) fields for other tools. Throws mmlio::Error naming the path on inconsistent input.
 void writePcdFieldsBinary(const std::string& path, const PcdCloud& cloud);
+/// The same, with the values of each of the `points` rows asked for in file order (row(values):
+/// one value per field) instead of held in columns: a large cloud needs no copy.
+void writePcdFieldsBinary(const std::string& path, const std::vector<PcdField>& fields, std::size_t points,
+                          const std::function<void(double* values)>& row);
 
 /// Parses the header only. Throws mmlio::Error naming the path on a malformed header.
 PcdHeader readPcdHeader(const std::string& path);
