@@ -339,9 +339,11 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
     io::writePcdBinary(dir + "map_dynamic.pcd", dynamic_map);
     out.dynamic_map = dir + "map_dynamic.pcd";
   }
+  const std::vector<Point>* page_map = &map_points;
   if (cfg_.output.write_session && !localizer_) {
     for (SessionKeyframe& k : session.keyframes) k.stamp_ns = online_.externalStamp(k.stamp_ns);
-    session.map = std::move(map_points);  // the page below reads it from there: a hall's map is 80 MB
+    session.map = std::move(map_points);  // not copied (a hall's is 80 MB): the page reads it there
+    page_map = &session.map;
     out.session = dir + "session";
     out.session_keyframes = session.keyframes.size();
     io::writeSession(out.session, session,
@@ -349,7 +351,7 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
                       report.run.config_yaml});
   }
   report.memory.peak_rss_mb = peakRssMb();  // with the map's assembly and the session's writing
-  writeReports(dir, report, trajectory, session.map.empty() ? map_points : session.map, gt_path);
+  writeReports(dir, report, trajectory, *page_map, gt_path);
   return report;
 }
 
