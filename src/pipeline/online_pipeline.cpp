@@ -58,6 +58,7 @@ void OnlinePipeline::addImu(const ImuSample& sample) {
       imu_period_ns_ = gap_ns;
     }
   }
+  imu_stream_.add("imu", s.stamp_ns);
   odometry_.addImu(s);
   drain(false);
 }
@@ -112,14 +113,23 @@ void OnlinePipeline::addScan(LidarScan scan) {
 
 void OnlinePipeline::flush() { drain(true); }
 
-std::map<std::string, LidarStreamTally::Stream> OnlinePipeline::lidarStreams(Stamp stream_end_ns) const {
-  std::map<std::string, LidarStreamTally::Stream> out = streams_.streamsUntil(stream_end_ns - shift_ns_);
-  for (auto& [sensor, st] : out) {
-    st.first_ns = externalStamp(st.first_ns);
-    st.last_ns = externalStamp(st.last_ns);
-    for (LidarStreamTally::Gap& g : st.gaps) g.after_ns = externalStamp(g.after_ns);
-  }
+std::map<std::string, StreamTally::Stream> OnlinePipeline::lidarStreams(Stamp stream_end_ns) const {
+  std::map<std::string, StreamTally::Stream> out = streams_.streamsUntil(stream_end_ns - shift_ns_);
+  for (auto& [sensor, st] : out) inputTime(&st);
   return out;
+}
+
+StreamTally::Stream OnlinePipeline::imuStream(Stamp stream_end_ns) const {
+  std::map<std::string, StreamTally::Stream> out = imu_stream_.streamsUntil(stream_end_ns - shift_ns_);
+  StreamTally::Stream st = out.empty() ? StreamTally::Stream() : out.begin()->second;
+  inputTime(&st);
+  return st;
+}
+
+void OnlinePipeline::inputTime(StreamTally::Stream* st) const {
+  st->first_ns = externalStamp(st->first_ns);
+  st->last_ns = externalStamp(st->last_ns);
+  for (StreamTally::Gap& g : st->gaps) g.after_ns = externalStamp(g.after_ns);
 }
 
 void OnlinePipeline::drain(bool all) {

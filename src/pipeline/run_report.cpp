@@ -115,21 +115,23 @@ Json toJson(const RunReport& r) {
   in["scans_dropped"] = {{"out_of_order", r.input.scans_out_of_order}, {"stamp_jumps", r.input.scans_stamp_jumps}};
   if (r.input.scans_out_of_order + r.input.scans_stamp_jumps > 0)
     in["scans_dropped"]["between_s"] = span(r.input.scans_dropped_from_ns, r.input.scans_dropped_to_ns);
-  Json streams = Json::object();
-  for (const auto& [name, st] : r.input.lidar_streams) {
+  const auto streamJson = [](const StreamTally::Stream& st) {
     Json gaps = Json::array();
-    for (const LidarStreamTally::Gap& g : st.gaps)
-      gaps.push_back({{"after_s", toSec(g.after_ns)}, {"missing", g.missing}});
-    Json& j = streams[name];
-    j = {{"received", st.received},
-         {"expected", st.expected()},
-         {"missing", st.missing},
-         {"period_s", st.period_s},
-         {"first_s", toSec(st.first_ns)},
-         {"last_s", toSec(st.last_ns)},
-         {"gaps", gaps}};
-  }
+    for (const StreamTally::Gap& g : st.gaps) gaps.push_back({{"after_s", toSec(g.after_ns)}, {"missing", g.missing}});
+    return Json{{"received", st.received},
+                {"expected", st.expected()},
+                {"missing", st.missing},
+                {"period_s", st.period_s},
+                {"first_s", toSec(st.first_ns)},
+                {"last_s", toSec(st.last_ns)},
+                {"gaps", gaps}};
+  };
+  Json streams = Json::object();
+  for (const auto& [name, st] : r.input.lidar_streams) streams[name] = streamJson(st);
   in["lidar_streams"] = streams;
+  // Counted, not a degradation by itself: a missing sample or two is bridged by the preintegration,
+  // and a longer gap degrades the sweeps it falls in.
+  in["imu_stream"] = streamJson(r.input.imu_stream);
   Json jumps = Json::array();
   for (const auto& j : r.input.time_base_jumps) jumps.push_back({{"at_s", j.at_s}, {"shift_s", j.shift_s}});
   in["time_base_jumps"] = jumps;

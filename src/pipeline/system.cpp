@@ -203,8 +203,9 @@ RunReport System::report(Stamp stream_end_ns, const TrustLimits& limits) const {
   r.input.scans_stamp_jumps = online_.scanDrops().jumped;
   r.input.scans_dropped_from_ns = online_.scanDrops().first_at_ns;
   r.input.scans_dropped_to_ns = online_.scanDrops().last_at_ns;
-  r.input.lidar_streams =
-      online_.lidarStreams(stream_end_ns > 0 ? stream_end_ns : externalStamp(odometry().lastImuNs()));
+  const Stamp end_ns = stream_end_ns > 0 ? stream_end_ns : externalStamp(odometry().lastImuNs());
+  r.input.lidar_streams = online_.lidarStreams(end_ns);
+  r.input.imu_stream = online_.imuStream(end_ns);
   for (const OnlinePipeline::TimeBaseJump& j : online_.timeBaseJumps())
     r.input.time_base_jumps.push_back({toSec(j.at_ns), toSec(j.shift_ns)});
   r.imu_init = odometry().imuInit();

@@ -212,6 +212,28 @@ TEST(LiveReport, ScansThatNeverArriveMakeTheRunDegradedAndNameTheLidar) {
   EXPECT_NE(hi.inputStatus().find("velodyne sent no scan"), std::string::npos) << hi.inputStatus();
 }
 
+// Every IMU sample is accounted for too: received, expected from the rate, missing (here: every
+// fiftieth between 2 and 5 s never usable).
+TEST(LiveReport, ImuSamplesThatNeverArriveAreCounted) {
+  const sim::Simulator sim = office(6.0);
+  const RunReport ok = systemReport(sim, {});
+  EXPECT_EQ(ok.input.imu_stream.missing, 0u);
+  EXPECT_GT(ok.input.imu_stream.received, 1100u);  // 200 Hz over 6 s
+  EXPECT_NEAR(ok.input.imu_stream.period_s, 0.005, 1e-4);
+
+  const Stamp from = sim.startNs() + fromSec(2.0), to = sim.startNs() + fromSec(5.0);
+  std::size_t lost = 0;
+  const RunReport holes = systemReport(sim, {}, [&](std::size_t i, ImuSample& s) {
+    if (s.stamp_ns < from || s.stamp_ns >= to || i % 50 != 0) return;
+    s.acc_m_s2 = Eigen::Vector3d::Constant(std::nan(""));  // dropped by the IMU gate: a hole in the stream
+    ++lost;
+  });
+  ASSERT_GT(lost, 10u);
+  EXPECT_EQ(holes.input.imu_stream.missing, lost);
+  EXPECT_EQ(holes.input.imu_stream.expected(), ok.input.imu_stream.expected());
+  EXPECT_EQ(holes.input.imu_stream.gaps.size(), lost);
+}
+
 }  // namespace mmlio::pipeline
 
 namespace mmlio {

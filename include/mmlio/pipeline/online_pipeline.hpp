@@ -12,7 +12,7 @@
 #include "mmlio/estimator/odometry.hpp"
 #include "mmlio/lidar/sweep_aligner.hpp"
 #include "mmlio/pipeline/imu_gate.hpp"
-#include "mmlio/pipeline/lidar_stream_tally.hpp"
+#include "mmlio/pipeline/stream_tally.hpp"
 #include "mmlio/pipeline/stamp_jump_guard.hpp"
 
 namespace mmlio::pipeline {
@@ -43,7 +43,9 @@ class OnlinePipeline {
   const ScanDrops& scanDrops() const { return scan_drops_; }
   std::size_t sweepsProcessed() const { return processed_; }
   /// Every LiDAR stream's scans received and missing as of the stream's end, in the stream's time.
-  std::map<std::string, LidarStreamTally::Stream> lidarStreams(Stamp stream_end_ns) const;
+  std::map<std::string, StreamTally::Stream> lidarStreams(Stamp stream_end_ns) const;
+  /// The same for the IMU's accepted samples.
+  StreamTally::Stream imuStream(Stamp stream_end_ns) const;
   /// Most sweeps that waited at once for the IMU to cover them (bounded: see kMaxImuWaitNs).
   std::size_t waitingHighWater() const { return waiting_high_water_; }
 
@@ -66,13 +68,16 @@ class OnlinePipeline {
 
  private:
   void drain(bool all);
+  /// A tallied stream's stamps (the estimator's) in the stream's own time.
+  void inputTime(StreamTally::Stream* st) const;
 
   std::map<std::string, double> offset_s_;
   lidar::SweepAligner aligner_;
   estimator::Odometry odometry_;
   ImuGate imu_gate_;
   ScanDrops scan_drops_;
-  LidarStreamTally streams_;  // in the estimator's stamps
+  StreamTally streams_;     // in the estimator's stamps
+  StreamTally imu_stream_;  // the same, one stream named "imu"
   std::map<std::string, Stamp> last_scan_ns_;
   std::map<std::string, StampJumpGuard> scan_jumps_;  // per LiDAR
   bool timeBaseJumped(Stamp imu_jump_ns) const;

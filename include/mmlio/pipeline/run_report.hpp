@@ -16,7 +16,7 @@
 #include "mmlio/io/decode_stats.hpp"
 #include "mmlio/pipeline/imu_gate.hpp"
 #include "mmlio/pipeline/json.hpp"
-#include "mmlio/pipeline/lidar_stream_tally.hpp"
+#include "mmlio/pipeline/stream_tally.hpp"
 #include "mmlio/pipeline/stage_stats.hpp"
 
 namespace mmlio::pipeline {
@@ -41,7 +41,8 @@ struct RunReport {
     };
     std::vector<TimeBaseJump> time_base_jumps;       // the whole stream's time base jumped (see OnlinePipeline)
     std::map<std::string, io::DecodeStats> decoded;  // per LiDAR
-    std::map<std::string, LidarStreamTally::Stream> lidar_streams;  // scans received and missing, per LiDAR
+    std::map<std::string, StreamTally::Stream> lidar_streams;  // scans received and missing, per LiDAR
+    StreamTally::Stream imu_stream;                            // the IMU's accepted samples, and those missing
   };
   struct Sweeps {
     std::size_t processed = 0, tracked = 0, degraded = 0, initialising = 0, keyframes = 0, degenerate = 0;

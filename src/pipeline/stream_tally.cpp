@@ -1,31 +1,31 @@
-#include "mmlio/pipeline/lidar_stream_tally.hpp"
+#include "mmlio/pipeline/stream_tally.hpp"
 
 #include <algorithm>
 #include <cmath>
 
 namespace mmlio::pipeline {
 
-Stamp LidarStreamTally::period(const State& s) {
+Stamp StreamTally::period(const State& s) {
   if (s.intervals.empty()) return 0;
   std::vector<Stamp> v = s.intervals;
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
   return v[v.size() / 2];
 }
 
-void LidarStreamTally::recordMissing(Stream* st, Stamp after_ns, std::size_t missing) {
+void StreamTally::recordMissing(Stream* st, Stamp after_ns, std::size_t missing) {
   st->missing += missing;
   if (st->gaps.size() < kMaxListed) st->gaps.push_back({after_ns, missing});
 }
 
-void LidarStreamTally::add(const std::string& sensor, Stamp start_ns) {
+void StreamTally::add(const std::string& sensor, Stamp stamp_ns) {
   Stream& st = streams_[sensor];
   State& s = state_[sensor];
-  if (st.received == 0) st.first_ns = start_ns;
+  if (st.received == 0) st.first_ns = stamp_ns;
   ++st.received;
   const Stamp last_ns = st.last_ns;
-  st.last_ns = start_ns;
+  st.last_ns = stamp_ns;
   if (st.received == 1) return;
-  const Stamp interval = start_ns - last_ns;
+  const Stamp interval = stamp_ns - last_ns;
   if (s.intervals.size() < static_cast<std::size_t>(kLearnIntervals)) {
     // The period is learnt from the first intervals (their median: one of them may be a gap
     // itself), which are then judged by it like every later one.
@@ -50,7 +50,7 @@ void LidarStreamTally::add(const std::string& sensor, Stamp start_ns) {
   st.period_s = toSec(period(s));
 }
 
-bool LidarStreamTally::judge(Stream* st, Stamp after_ns, Stamp interval, Stamp period) {
+bool StreamTally::judge(Stream* st, Stamp after_ns, Stamp interval, Stamp period) {
   if (period <= 0) return false;
   const double periods = static_cast<double>(interval) / static_cast<double>(period);
   if (periods < 1.5) return false;
@@ -58,7 +58,7 @@ bool LidarStreamTally::judge(Stream* st, Stamp after_ns, Stamp interval, Stamp p
   return true;
 }
 
-std::map<std::string, LidarStreamTally::Stream> LidarStreamTally::streamsUntil(Stamp end_ns) const {
+std::map<std::string, StreamTally::Stream> StreamTally::streamsUntil(Stamp end_ns) const {
   std::map<std::string, Stream> out = streams_;
   for (auto& [sensor, st] : out) {
     const auto state = state_.find(sensor);

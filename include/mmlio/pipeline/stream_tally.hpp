@@ -1,8 +1,9 @@
 #pragma once
-// Accounts for every LiDAR stream: scans received and scans missing. A transport that loses
-// clouds, a driver that skips sweeps, a bag recorded with holes and scans without a single valid
-// point (dropped by the decoder) look the same from here: an interval of k scan periods between
-// two scans means k - 1 are missing. Nothing else would notice: the estimator bridges a missing sweep.
+// Accounts for every sensor stream (each LiDAR, the IMU): messages received and messages missing.
+// A transport that loses clouds, a driver that skips sweeps, a bag recorded with holes and scans
+// without a single valid point (dropped by the decoder) look the same from here: an interval of k
+// periods between two messages means k - 1 are missing. Nothing else would notice: the estimator
+// bridges a missing sweep, and the IMU's preintegration a missing sample.
 #include <cstddef>
 #include <map>
 #include <string>
@@ -12,7 +13,7 @@
 
 namespace mmlio::pipeline {
 
-class LidarStreamTally {
+class StreamTally {
  public:
   struct Gap {
     Stamp after_ns = 0;  // the last scan before it
@@ -29,12 +30,12 @@ class LidarStreamTally {
   static constexpr int kPeriodWindow = 16;   // intervals the period is the median of
   static constexpr int kLearnIntervals = 5;  // before the first judgement
 
-  /// A LiDAR the run uses: listed even if it never sends a scan.
+  /// A sensor the run uses: listed even if it never sends a message.
   void expect(const std::string& sensor) { streams_[sensor]; }
-  /// One accepted scan of `sensor` (in order), starting at start_ns.
-  void add(const std::string& sensor, Stamp start_ns);
-  /// The streams as of `end_ns`, the stream's end: a LiDAR that stopped before the others did
-  /// misses the scans it would have sent since (0: as of its own last scan).
+  /// One accepted message of `sensor` (in order), stamped stamp_ns (a scan's start).
+  void add(const std::string& sensor, Stamp stamp_ns);
+  /// The streams as of `end_ns`, the stream's end: a sensor that stopped before the others did
+  /// misses the messages it would have sent since (0: as of its own last message).
   std::map<std::string, Stream> streamsUntil(Stamp end_ns) const;
 
  private:
