@@ -238,8 +238,7 @@ void LiveFeeder::onSweep(const estimator::SweepResult& r) {
   }
   if (outlet_.wantsScan()) outlet_.scan(toPointCloud2(r.points_body, T_odom_body, stamp_ns, options_.odom_frame));
   if (!r.keyframe) return;
-  if (const backend::LocalizationStatus* s = system_.localization())
-    outlet_.diagnostics(toDiagnostics(*s, r.state.stamp_ns, stamp_ns, "mmlio: localization"));
+  publishDiagnostics(r.state.stamp_ns, stamp_ns);
   if (last_save_ns_ == 0) last_save_ns_ = r.state.stamp_ns;
   if (!options_.out_dir.empty() && options_.autosave_period_s > 0 &&
       toSec(r.state.stamp_ns - last_save_ns_) >= options_.autosave_period_s) {
@@ -253,6 +252,19 @@ void LiveFeeder::onSweep(const estimator::SweepResult& r) {
     outlet_.map(toPointCloud2(system_.map(), Eigen::Isometry3d::Identity(), stamp_ns, options_.map_frame));
     last_map_ns_ = r.state.stamp_ns;
   }
+}
+
+void LiveFeeder::publishDiagnostics(Stamp now_ns, Stamp stamp_ns) {
+  InputFigures f;
+  f.imu_messages = imu_messages_;
+  f.sweeps = system_.sweepsProcessed();
+  f.sweeps_degraded = degraded_;
+  f.dropped_imu = droppedImu();
+  f.dropped_scans = droppedScans();
+  std::vector<diagnostic_msgs::DiagnosticStatus> statuses{inputStatus(f, "mmlio: input")};
+  if (const backend::LocalizationStatus* s = system_.localization())
+    statuses.push_back(localizationStatus(*s, now_ns, "mmlio: localization"));
+  outlet_.diagnostics(toDiagnostics(std::move(statuses), stamp_ns));
 }
 
 std::string LiveFeeder::writeOutputs() {

@@ -76,7 +76,7 @@ class Outlet {
   virtual void path(const nav_msgs::Path& msg) = 0;
   virtual bool wantsMap() const = 0;
   virtual void map(const sensor_msgs::PointCloud2& msg) = 0;
-  /// While localizing in a session: its state, every keyframe.
+  /// Every keyframe: the input's state, and the localization's when localizing.
   virtual void diagnostics(const diagnostic_msgs::DiagnosticArray& msg) = 0;
 };
 
@@ -140,6 +140,8 @@ class LiveFeeder {
   void run();
   void process(const Message& m);
   void onSweep(const estimator::SweepResult& r);
+  /// The input's state, and the localization's when localizing, on /diagnostics.
+  void publishDiagnostics(Stamp now_ns, Stamp stamp_ns);
   std::string writeOutputs();
 
   FeederOptions options_;

@@ -136,8 +136,19 @@ Eigen::Isometry3d fromPose(const geometry_msgs::Pose& pose) {
   return T;
 }
 
-diagnostic_msgs::DiagnosticArray toDiagnostics(const backend::LocalizationStatus& s, Stamp now_ns, Stamp stamp_ns,
-                                               const std::string& name) {
+namespace {
+
+void addValue(diagnostic_msgs::DiagnosticStatus* d, const std::string& key, const std::string& value) {
+  diagnostic_msgs::KeyValue kv;
+  kv.key = key;
+  kv.value = value;
+  d->values.push_back(kv);
+}
+
+}  // namespace
+
+diagnostic_msgs::DiagnosticStatus localizationStatus(const backend::LocalizationStatus& s, Stamp now_ns,
+                                                     const std::string& name) {
   diagnostic_msgs::DiagnosticStatus d;
   d.name = name;
   const bool lost = !s.localized && !s.lost_spells.empty();
@@ -152,25 +163,49 @@ diagnostic_msgs::DiagnosticArray toDiagnostics(const backend::LocalizationStatus
     d.level = diagnostic_msgs::DiagnosticStatus::WARN;
     d.message = "not localized yet (" + s.last_reason + ")";
   }
-  const auto add = [&d](const std::string& key, const std::string& value) {
-    diagnostic_msgs::KeyValue kv;
-    kv.key = key;
-    kv.value = value;
-    d.values.push_back(kv);
-  };
-  add("localized", s.localized ? "true" : "false");
-  add("first_localized_s_ago", s.first_localized_ns ? std::to_string(toSec(now_ns - *s.first_localized_ns)) : "never");
-  add("keyframes", std::to_string(s.keyframes));
-  add("keyframes_fitting_the_map", std::to_string(s.keyframes_fitted));
-  add("last_fitness_m", std::to_string(s.last_fitness_m));
-  add("last_overlap", std::to_string(s.last_overlap));
-  add("lost_spells", std::to_string(s.lost_spells.size()));
-  add("relocalizations", std::to_string(s.relocalizations));
-  add("pose_hints", std::to_string(s.pose_hints));
-  add("pose_hints_refuted", std::to_string(s.pose_hints_refuted));
+  addValue(&d, "localized", s.localized ? "true" : "false");
+  addValue(&d, "first_localized_s_ago",
+           s.first_localized_ns ? std::to_string(toSec(now_ns - *s.first_localized_ns)) : "never");
+  addValue(&d, "keyframes", std::to_string(s.keyframes));
+  addValue(&d, "keyframes_fitting_the_map", std::to_string(s.keyframes_fitted));
+  addValue(&d, "last_fitness_m", std::to_string(s.last_fitness_m));
+  addValue(&d, "last_overlap", std::to_string(s.last_overlap));
+  addValue(&d, "lost_spells", std::to_string(s.lost_spells.size()));
+  addValue(&d, "relocalizations", std::to_string(s.relocalizations));
+  addValue(&d, "pose_hints", std::to_string(s.pose_hints));
+  addValue(&d, "pose_hints_refuted", std::to_string(s.pose_hints_refuted));
+  return d;
+}
+
+diagnostic_msgs::DiagnosticStatus inputStatus(const InputFigures& f, const std::string& name) {
+  diagnostic_msgs::DiagnosticStatus d;
+  d.name = name;
+  if (f.dropped_imu > 0) {
+    d.level = diagnostic_msgs::DiagnosticStatus::ERROR;
+    d.message = std::to_string(f.dropped_imu) + " IMU messages dropped: the node falls behind its sensors";
+  } else if (f.dropped_scans > 0) {
+    d.level = diagnostic_msgs::DiagnosticStatus::WARN;
+    d.message = std::to_string(f.dropped_scans) + " LiDAR messages dropped: the node falls behind its sensors";
+  } else if (f.sweeps_degraded > 0) {
+    d.level = diagnostic_msgs::DiagnosticStatus::WARN;
+    d.message = std::to_string(f.sweeps_degraded) + " of " + std::to_string(f.sweeps) + " sweeps degraded";
+  } else {
+    d.level = diagnostic_msgs::DiagnosticStatus::OK;
+    d.message = "keeping up, nothing dropped";
+  }
+  addValue(&d, "imu_messages", std::to_string(f.imu_messages));
+  addValue(&d, "sweeps", std::to_string(f.sweeps));
+  addValue(&d, "sweeps_degraded", std::to_string(f.sweeps_degraded));
+  addValue(&d, "dropped_imu", std::to_string(f.dropped_imu));
+  addValue(&d, "dropped_scans", std::to_string(f.dropped_scans));
+  return d;
+}
+
+diagnostic_msgs::DiagnosticArray toDiagnostics(std::vector<diagnostic_msgs::DiagnosticStatus> statuses,
+                                               Stamp stamp_ns) {
   diagnostic_msgs::DiagnosticArray out;
   out.header.stamp = toRosTime(stamp_ns);
-  out.status.push_back(d);
+  out.status = std::move(statuses);
   return out;
 }
 

@@ -53,8 +53,19 @@ Eigen::Isometry3d fromPose(const geometry_msgs::Pose& pose);
 
 /// A localization's state as /diagnostics carries it (rqt_robot_monitor): OK once localized, WARN
 /// while searching, ERROR when lost; its figures as key/values. now_ns in the estimator's time
-/// (the status's stamps), stamp_ns the message's.
-diagnostic_msgs::DiagnosticArray toDiagnostics(const backend::LocalizationStatus& s, Stamp now_ns, Stamp stamp_ns,
-                                               const std::string& name);
+/// (the status's stamps).
+diagnostic_msgs::DiagnosticStatus localizationStatus(const backend::LocalizationStatus& s, Stamp now_ns,
+                                                     const std::string& name);
+
+/// What the node has had to give up so far.
+struct InputFigures {
+  std::size_t imu_messages = 0, sweeps = 0, sweeps_degraded = 0;
+  std::size_t dropped_imu = 0, dropped_scans = 0;  // by the full hand-off queue: the node falls behind
+};
+/// The input's state for /diagnostics: OK while nothing is lost, WARN when LiDAR messages were
+/// dropped (the node is slower than the sensors) or sweeps degraded, ERROR when IMU messages were.
+diagnostic_msgs::DiagnosticStatus inputStatus(const InputFigures& f, const std::string& name);
+
+diagnostic_msgs::DiagnosticArray toDiagnostics(std::vector<diagnostic_msgs::DiagnosticStatus> statuses, Stamp stamp_ns);
 
 }  // namespace mmlio::live

@@ -136,6 +136,8 @@ check_in_session_frame(work, "loc", "in the session's map frame, the hint notwit
 diagnostics = open(f"{work}/diagnostics.txt").read()
 check('name: "mmlio: localization"' in diagnostics and "level: 0" in diagnostics,
       "/diagnostics carried the localization, OK once localized")
+check('name: "mmlio: input"' in diagnostics and "keeping up, nothing dropped" in diagnostics,
+      "/diagnostics carried the input's state: keeping up")
 finish()
 PY
 

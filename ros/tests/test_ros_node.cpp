@@ -194,18 +194,34 @@ TEST(RosMessages, APoseReadsBackAsTheTransformItCameFrom) {
 TEST(RosMessages, DiagnosticsSayOkWhenLocalizedWarnBeforeAndErrorWhenLost) {
   backend::LocalizationStatus s;
   s.last_reason = "ambiguous";
-  const auto level = [&](Stamp now) { return toDiagnostics(s, now, now, "mmlio: localization").status.at(0).level; };
+  const auto level = [&](Stamp now) { return localizationStatus(s, now, "mmlio: localization").level; };
   EXPECT_EQ(level(1'000'000'000), diagnostic_msgs::DiagnosticStatus::WARN);
   s.localized = true;
   s.first_localized_ns = 1'000'000'000;
   EXPECT_EQ(level(2'000'000'000), diagnostic_msgs::DiagnosticStatus::OK);
   s.localized = false;
   s.lost_spells.emplace_back(3'000'000'000, 0);
-  const diagnostic_msgs::DiagnosticArray lost = toDiagnostics(s, 10'000'000'000, 10'000'000'000, "mmlio: localization");
+  const diagnostic_msgs::DiagnosticArray lost =
+      toDiagnostics({localizationStatus(s, 10'000'000'000, "mmlio: localization")}, 10'000'000'000);
   EXPECT_EQ(lost.status.at(0).level, diagnostic_msgs::DiagnosticStatus::ERROR);
   EXPECT_EQ(lost.status.at(0).name, "mmlio: localization");
   EXPECT_NE(lost.status.at(0).message.find("lost for 7 s"), std::string::npos) << lost.status.at(0).message;
   EXPECT_EQ(lost.header.stamp.toNSec(), 10'000'000'000u);
+}
+
+TEST(RosMessages, TheInputStatusSaysWhatTheNodeGaveUp) {
+  InputFigures f;
+  f.imu_messages = 2000;
+  f.sweeps = 100;
+  EXPECT_EQ(inputStatus(f, "mmlio: input").level, diagnostic_msgs::DiagnosticStatus::OK);
+  f.sweeps_degraded = 3;
+  EXPECT_EQ(inputStatus(f, "mmlio: input").level, diagnostic_msgs::DiagnosticStatus::WARN);
+  f.dropped_scans = 7;
+  const diagnostic_msgs::DiagnosticStatus behind = inputStatus(f, "mmlio: input");
+  EXPECT_EQ(behind.level, diagnostic_msgs::DiagnosticStatus::WARN);
+  EXPECT_NE(behind.message.find("7 LiDAR messages dropped"), std::string::npos) << behind.message;
+  f.dropped_imu = 1;
+  EXPECT_EQ(inputStatus(f, "mmlio: input").level, diagnostic_msgs::DiagnosticStatus::ERROR);
 }
 
 }  // namespace
