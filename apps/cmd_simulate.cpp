@@ -34,6 +34,7 @@ struct SimulateArgs {
   bool random_mount = false;
   int people = 0;
   bool handheld = false;
+  int route_start = 0;
 };
 
 YAML::Node vec3(const Eigen::Vector3d& v) {
@@ -72,6 +73,7 @@ void writeTruth(const std::string& path, const sim::Simulator& sim, const Simula
   extra["seed"] = args.seed;
   extra["people"] = sim.crowd().size();
   extra["handheld"] = args.handheld;
+  extra["route_start"] = args.route_start;
   extra["duration_s"] = sim.durationS();
   extra["path_length_m"] = sim.pathLengthM();
   extra["start_stamp_ns"] = sim.startNs();
@@ -92,6 +94,7 @@ void runSimulate(const SimulateArgs& args) {
   options.random_mount = args.random_mount;
   options.people = args.people;
   options.handheld = args.handheld;
+  options.route_start = args.route_start;
   options.livox_pattern =
       args.pattern == "rosette" ? sim::SolidStatePattern::kRosette : sim::SolidStatePattern::kLissajous;
   options.livox_no_returns_as_zero = true;  // what livox_ros_driver publishes
@@ -194,6 +197,9 @@ void registerSimulateCommand(CLI::App& app) {
   cmd->add_flag("--handheld", args->handheld,
                 "Carry the route by hand: ~3 cm bounce at 1.9 steps/s, 3 deg sway and nod, turns up to 150 deg/s, "
                 "looks 25 deg down and 20 deg up (the stairs scenario is always carried by hand)");
+  cmd->add_option("--route-start", args->route_start,
+                  "Walk the scenario's closed route from this waypoint on (default 0, as designed): a localization "
+                  "that starts elsewhere than the mapping walk did");
   cmd->callback([args] { runSimulate(*args); });
 }
 

@@ -454,6 +454,25 @@ std::vector<std::string> scenarioNames() {
   return {"office", "corridor", "corridor_blind", "hall", "stairs", "ramp", "lab"};
 }
 
+Scenario startingAt(Scenario s, int first) {
+  if (first == 0) return s;
+  if (!s.recorded.empty()) throw Error("scenario '" + s.name + "' follows a recorded motion: it has no other start");
+  const int n = static_cast<int>(s.waypoints.size());
+  if (first < 0 || first >= n - 1)
+    throw Error("scenario '" + s.name + "' has waypoints 0 to " + std::to_string(n - 2) + " to start from, not " +
+                std::to_string(first));
+  // The last waypoint is the first after whole turns: the part walked again after it keeps them.
+  const double turns = s.waypoints.back().yaw_rad - s.waypoints.front().yaw_rad;
+  std::vector<Waypoint> route(s.waypoints.begin() + first, s.waypoints.end());
+  for (int i = 1; i <= first; ++i) {
+    Waypoint w = s.waypoints[static_cast<std::size_t>(i)];
+    w.yaw_rad += turns;
+    route.push_back(w);
+  }
+  s.waypoints = std::move(route);
+  return s;
+}
+
 Scenario carriedByHand(Scenario s) {
   const double speed_m_s = s.walk.speed_m_s;
   s.walk = handheldWalk();

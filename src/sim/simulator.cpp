@@ -21,7 +21,7 @@ double deg(double d) { return d * M_PI / 180.0; }
 
 Simulator::Simulator(SimOptions options) : options_(std::move(options)) {
   if (options_.duration_s < 0) throw Error("simulation duration must be >= 0 s (0 = the scenario's default)");
-  scenario_ = makeScenario(options_.scenario);
+  scenario_ = startingAt(makeScenario(options_.scenario), options_.route_start);
   if (options_.handheld) scenario_ = carriedByHand(scenario_);
   scene_ = Scene(scenario_.boxes);
   motion_ = scenario_.recorded.empty() ? walkMotion(scenario_.waypoints, scenario_.walk, options_.duration_s)

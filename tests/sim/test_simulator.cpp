@@ -173,6 +173,27 @@ TEST(Simulator, StartsAtRestAndEndsAtRestAtTheStartPose) {
   }
 }
 
+TEST(Simulator, AClosedRouteWalkedFromAnotherWaypointStartsThereAndIsTheSameRoute) {
+  SimOptions o = opts("office", 0.0);
+  const Simulator designed(o);
+  o.route_start = 2;
+  const Simulator later(o);
+  const Waypoint w = later.scenario().waypoints.front();
+  EXPECT_NEAR((later.groundTruth().front().T_world_body.translation() - Eigen::Vector3d(w.x_m, w.y_m, 1.2)).norm(), 0.0,
+              1e-9);
+  EXPECT_EQ(later.scenario().waypoints.size(), designed.scenario().waypoints.size());
+  EXPECT_NEAR(later.pathLengthM(), designed.pathLengthM(), 0.05 * designed.pathLengthM());
+  const Trajectory& gt = later.groundTruth();  // closed: it ends where it started, facing the same way
+  EXPECT_LT((gt.front().T_world_body.translation() - gt.back().T_world_body.translation()).norm(), 1e-9);
+  EXPECT_LT(Eigen::AngleAxisd(gt.front().T_world_body.linear().transpose() * gt.back().T_world_body.linear()).angle(),
+            1e-9);
+  o.route_start = 99;
+  EXPECT_THROW(Simulator{o}, Error);
+  SimOptions lab = opts("lab", 5.0);
+  lab.route_start = 1;  // a recorded motion has one start
+  EXPECT_THROW(Simulator{lab}, Error);
+}
+
 TEST(Simulator, DefaultDurationsAreNearTheAdvertisedOnes) {
   EXPECT_NEAR(Simulator(opts("office", 0)).durationS(), 40.0, 8.0);
   EXPECT_NEAR(Simulator(opts("corridor", 0)).durationS(), 110.0, 15.0);

@@ -40,6 +40,10 @@ Scenario makeScenario(const std::string& name);
 /// A walker's hand-held gait: ~3 cm bounce at 1.9 steps/s, 3 deg sway and nod, 2 deg yaw wobble,
 /// turns up to 150 deg/s.
 WalkConfig handheldWalk();
+/// The same closed route walked from waypoint `first` on (0: as designed), e.g. a localization that
+/// starts where the mapping walk did not. Throws mmlio::Error for a recorded motion (lab) or a
+/// waypoint the route does not have.
+Scenario startingAt(Scenario s, int first);
 /// The scenario's route carried by hand: the hand-held gait at the route's speed, and deliberate
 /// looks 25 deg down and 20 deg up between waypoints (a recorded motion gets the gait only).
 Scenario carriedByHand(Scenario s);

@@ -57,6 +57,7 @@ struct SimOptions {
   int people = 0;                         // people walking through the scene (see people.hpp), paths from the seed
   bool handheld = false;                  // the route carried by hand (carriedByHand in scenarios.hpp)
   double velodyne_phase_s = -1;           // 0..0.1: Velodyne sweeps start this long after Livox frames (< 0: 37 ms)
+  int route_start = 0;                    // the closed route walked from this waypoint (startingAt)
 };
 
 /// A scenario's full walk with every other option at its default.
