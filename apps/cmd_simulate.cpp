@@ -35,6 +35,7 @@ struct SimulateArgs {
   int people = 0;
   bool handheld = false;
   int route_start = 0;
+  bool rearranged = false;
 };
 
 YAML::Node vec3(const Eigen::Vector3d& v) {
@@ -74,6 +75,7 @@ void writeTruth(const std::string& path, const sim::Simulator& sim, const Simula
   extra["people"] = sim.crowd().size();
   extra["handheld"] = args.handheld;
   extra["route_start"] = args.route_start;
+  extra["furniture_moved"] = sim.furnitureMoved();
   extra["duration_s"] = sim.durationS();
   extra["path_length_m"] = sim.pathLengthM();
   extra["start_stamp_ns"] = sim.startNs();
@@ -95,6 +97,7 @@ void runSimulate(const SimulateArgs& args) {
   options.people = args.people;
   options.handheld = args.handheld;
   options.route_start = args.route_start;
+  options.rearranged = args.rearranged;
   options.livox_pattern =
       args.pattern == "rosette" ? sim::SolidStatePattern::kRosette : sim::SolidStatePattern::kLissajous;
   options.livox_no_returns_as_zero = true;  // what livox_ros_driver publishes
@@ -200,6 +203,9 @@ void registerSimulateCommand(CLI::App& app) {
   cmd->add_option("--route-start", args->route_start,
                   "Walk the scenario's closed route from this waypoint on (default 0, as designed): a localization "
                   "that starts elsewhere than the mapping walk did");
+  cmd->add_flag("--rearranged", args->rearranged,
+                "Move the furniture 0.4-1 m (directions from the seed; clear of the route): the building revisited "
+                "after it changed");
   cmd->callback([args] { runSimulate(*args); });
 }
 

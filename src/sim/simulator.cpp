@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "mmlio/core/error.hpp"
+#include "mmlio/sim/furniture.hpp"
 #include "mmlio/sim/random.hpp"
 
 namespace mmlio::sim {
@@ -79,6 +80,10 @@ Simulator::Simulator(SimOptions options) : options_(std::move(options)) {
     path_length_m_ += (p - prev).norm();
     prev = p;
     route.emplace_back(p.head<2>());
+  }
+  if (options_.rearranged) {
+    furniture_moved_ = rearrangeFurniture(&scenario_.boxes, route, options_.seed);
+    scene_ = Scene(scenario_.boxes);
   }
   if (options_.people < 0) throw Error("the number of people must be >= 0");
   crowd_ = Crowd(scene_, route, options_.people, options_.seed);

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "mmlio/core/error.hpp"
@@ -192,6 +193,34 @@ TEST(Simulator, AClosedRouteWalkedFromAnotherWaypointStartsThereAndIsTheSameRout
   SimOptions lab = opts("lab", 5.0);
   lab.route_start = 1;  // a recorded motion has one start
   EXPECT_THROW(Simulator{lab}, Error);
+}
+
+TEST(Simulator, RearrangedFurnitureMovesClearOfTheRouteAndLeavesTheWalls) {
+  SimOptions o = opts("office", 0.0);
+  const Simulator designed(o);
+  o.rearranged = true;
+  const Simulator changed(o);
+  EXPECT_GE(changed.furnitureMoved(), 3u);
+  const std::vector<Box>& before = designed.scenario().boxes;
+  const std::vector<Box>& after = changed.scenario().boxes;
+  ASSERT_EQ(before.size(), after.size());
+  std::size_t moved = 0;
+  for (std::size_t i = 0; i < before.size(); ++i) {
+    const Eigen::Vector3d shift = after[i].lo - before[i].lo;
+    if (shift.norm() == 0.0) continue;
+    ++moved;
+    EXPECT_NEAR((after[i].hi - before[i].hi - shift).norm(), 0.0, 1e-12);  // moved, not resized
+    EXPECT_LE(before[i].hi.z() - before[i].lo.z(), 2.1);                   // furniture, not a wall
+    EXPECT_GE(shift.head<2>().norm(), 0.4 - 1e-9);
+    EXPECT_EQ(shift.z(), 0.0);
+    for (const StampedPose& p : changed.groundTruth()) {  // the rig never walks into it
+      const Eigen::Vector2d q = p.T_world_body.translation().head<2>();
+      const double dx = std::max({after[i].lo.x() - q.x(), 0.0, q.x() - after[i].hi.x()});
+      const double dy = std::max({after[i].lo.y() - q.y(), 0.0, q.y() - after[i].hi.y()});
+      ASSERT_GE(std::hypot(dx, dy), 0.69) << "box " << i;
+    }
+  }
+  EXPECT_EQ(moved, changed.furnitureMoved());
 }
 
 TEST(Simulator, DefaultDurationsAreNearTheAdvertisedOnes) {

@@ -58,6 +58,7 @@ struct SimOptions {
   bool handheld = false;                  // the route carried by hand (carriedByHand in scenarios.hpp)
   double velodyne_phase_s = -1;           // 0..0.1: Velodyne sweeps start this long after Livox frames (< 0: 37 ms)
   int route_start = 0;                    // the closed route walked from this waypoint (startingAt)
+  bool rearranged = false;                // the furniture moved (rearrangeFurniture), draws from the seed
 };
 
 /// A scenario's full walk with every other option at its default.
@@ -105,6 +106,8 @@ class Simulator {
   const LivoxConfig& livoxConfig() const { return livox_; }
 
   double pathLengthM() const { return path_length_m_; }
+  /// Pieces of furniture moved (SimOptions::rearranged).
+  std::size_t furnitureMoved() const { return furniture_moved_; }
   const Crowd& crowd() const { return crowd_; }
 
  private:
@@ -126,6 +129,7 @@ class Simulator {
   std::vector<ImuSample> imu_;
   std::vector<ImuBias> true_bias_;  // at each IMU sample
   double path_length_m_ = 0.0;
+  std::size_t furniture_moved_ = 0;
   Stamp velodyne_phase_ns_ = kVelodynePhaseNs;
   Eigen::Isometry3d T_imu_velodyne_, T_imu_livox_;
 };
