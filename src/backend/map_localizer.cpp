@@ -28,7 +28,8 @@ MapLocalizer::MapLocalizer(const Session& session, MapLocalizerConfig cfg,
 
 void MapLocalizer::addKeyframe(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body,
                                const std::vector<Eigen::Vector3d>& cloud_body) {
-  ++status_.keyframes;
+  if (status_.keyframes++ > 0) walked_since_update_m_ += (T_odom_body.translation() - last_keyframe_odom_).norm();
+  last_keyframe_odom_ = T_odom_body.translation();
   recent_.push_back({T_odom_body, cloud_body});
   while (static_cast<int>(recent_.size()) > std::max(1, cfg_.relocalize_keyframes)) recent_.pop_front();
   if (pending_hint_) {
@@ -79,6 +80,7 @@ bool MapLocalizer::relocalize(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_bo
     return false;
   }
   corrections_.emplace_back(stamp_ns, r.T_map_body * T_odom_body.inverse());
+  walked_since_update_m_ = 0.0;
   T_map_odom_hint_.reset();
   const bool was_localized = status_.localized;
   status_.localized = true;
@@ -106,23 +108,28 @@ void MapLocalizer::track(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body,
   const Eigen::Isometry3d predicted = T_map_odom * T_odom_body;
   IcpConfig icp;
   icp.max_corr_coarse_m = cfg_.track_max_corr_m;
+  icp.max_corr_fine_m = cfg_.track_max_corr_fine_m;
   icp.levels = 2;
   icp.voxel_fine_m = cfg_.map_voxel_m;
   const IcpResult r = alignPointToPlane(cloud, map_, predicted, icp);
   const Eigen::Isometry3d correction = predicted.inverse() * r.T_target_source;
   const double moved_deg = Eigen::AngleAxisd(correction.rotation()).angle() * 180.0 / M_PI;
-  const bool fits = r.converged && r.fitness_m <= cfg_.track_max_fitness_m && r.overlap >= cfg_.track_min_overlap &&
-                    correction.translation().norm() <= cfg_.track_max_correction_m &&
-                    moved_deg <= cfg_.track_max_correction_deg;
+  const double walked_m = walked_since_update_m_;
+  const bool fits =
+      r.converged && r.fitness_m <= cfg_.track_max_fitness_m && r.overlap >= cfg_.track_min_overlap &&
+      correction.translation().norm() <= cfg_.track_max_correction_m + cfg_.track_drift_per_m * walked_m &&
+      moved_deg <= cfg_.track_max_correction_deg + cfg_.track_drift_deg_per_m * walked_m;
   status_.last_fitness_m = r.fitness_m;
   status_.last_overlap = r.overlap;
   if (fits) {
     misses_ = 0;
     ++status_.keyframes_fitted;
-    if (r.min_translation_eigenvalue >= cfg_.track_min_eigenvalue)
+    if (r.min_translation_eigenvalue >= cfg_.track_min_eigenvalue) {
       corrections_.emplace_back(stamp_ns, r.T_target_source * T_odom_body.inverse());
-    else
+      walked_since_update_m_ = 0.0;
+    } else {
       ++status_.keyframes_degenerate;
+    }
     return;
   }
   if (++misses_ < cfg_.lost_after) return;

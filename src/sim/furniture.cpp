@@ -11,7 +11,7 @@ namespace {
 constexpr std::uint64_t kFurnitureId = 6;
 constexpr double kRouteClearanceM = 0.7;
 constexpr double kStructureHeightM = 2.5;  // taller boxes are walls, pillars, storeys: they stay
-constexpr int kDraws = 8;
+constexpr std::uint64_t kDraws = 8;
 
 bool isFurniture(const Box& b) {
   const Eigen::Vector3d size = b.hi - b.lo;
@@ -32,8 +32,7 @@ bool footprintsOverlap(const Box& a, const Box& b) {
 
 }  // namespace
 
-std::size_t rearrangeFurniture(std::vector<Box>* boxes, const std::vector<Eigen::Vector2d>& route,
-                               std::uint64_t seed) {
+std::size_t rearrangeFurniture(std::vector<Box>* boxes, const std::vector<Eigen::Vector2d>& route, std::uint64_t seed) {
   Eigen::Vector2d lo = Eigen::Vector2d::Constant(1e9), hi = Eigen::Vector2d::Constant(-1e9);
   for (const Box& b : *boxes) {
     lo = lo.cwiseMin(b.lo.head<2>());
@@ -42,15 +41,15 @@ std::size_t rearrangeFurniture(std::vector<Box>* boxes, const std::vector<Eigen:
   std::size_t moved = 0;
   for (std::size_t i = 0; i < boxes->size(); ++i) {
     if (!isFurniture((*boxes)[i])) continue;
-    for (int draw = 0; draw < kDraws; ++draw) {
+    for (std::uint64_t draw = 0; draw < kDraws; ++draw) {
       const double angle = 2.0 * M_PI * unitFromHash(hashKey(seed, kFurnitureId, i, 2 * draw));
       const double distance = 0.4 + 0.6 * unitFromHash(hashKey(seed, kFurnitureId, i, 2 * draw + 1));
       Box b = (*boxes)[i];
       const Eigen::Vector3d shift(distance * std::cos(angle), distance * std::sin(angle), 0.0);
       b.lo += shift;
       b.hi += shift;
-      const bool inside = (b.lo.head<2>().array() > lo.array() + 0.1).all() &&
-                          (b.hi.head<2>().array() < hi.array() - 0.1).all();
+      const bool inside =
+          (b.lo.head<2>().array() > lo.array() + 0.1).all() && (b.hi.head<2>().array() < hi.array() - 0.1).all();
       const bool off_structure = std::none_of(boxes->begin(), boxes->end(), [&](const Box& other) {
         return other.hi.z() - other.lo.z() > kStructureHeightM && other.hi.z() > 0.05 && footprintsOverlap(b, other);
       });

@@ -13,7 +13,6 @@ namespace mmlio::sim {
 /// side) 0.4-1.0 m in a direction drawn from the seed, where it stays inside the scene, off the
 /// walls and pillars (boxes taller than 2.5 m) and 0.7 m from the rig's route (x, y samples);
 /// a piece with no such place in eight draws stays. Returns how many moved.
-std::size_t rearrangeFurniture(std::vector<Box>* boxes, const std::vector<Eigen::Vector2d>& route,
-                               std::uint64_t seed);
+std::size_t rearrangeFurniture(std::vector<Box>* boxes, const std::vector<Eigen::Vector2d>& route, std::uint64_t seed);
 
 }  // namespace mmlio::sim
