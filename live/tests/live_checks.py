@@ -1,4 +1,5 @@
 """What the live node tests' checks share: every check printed, the run failed at the end if any did."""
+import json
 import math
 import sys
 
@@ -25,6 +26,15 @@ def check_in_session_frame(work, folder, what):
     worst = max((math.dist(node[t], mapped[t]) for t in common), default=float("inf"))
     check(len(common) >= 0.9 * len(mapped), f"a localized pose for every mapped one ({len(common)} of {len(mapped)})")
     check(worst < 0.05, f"{what}: within {100 * worst:.2f} cm of the mapping run's poses")
+
+
+def check_found_in_session(work, folder):
+    """WORK/FOLDER's report: localized in the session within 3 s of its first message. Returns its
+    `localization` section."""
+    loc = json.load(open(f"{work}/{folder}/report.json")).get("localization", {})
+    check(loc.get("localized") is True, f"the node localized in the session ({loc.get('last_reason')})")
+    check(0 <= loc.get("first_localized_s", -1) < 3, f"within 3 s of its first message ({loc.get('first_localized_s')} s)")
+    return loc
 
 
 def finish():

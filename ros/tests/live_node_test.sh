@@ -123,13 +123,11 @@ sleep 3
 kill "$echo_pid" 2> /dev/null || true
 stop_node "$loc_pid"
 python3 - "$work" << 'PY' || fail "localization checks above"
-import json, sys
-from live_checks import check, check_in_session_frame, finish
+import sys
+from live_checks import check, check_found_in_session, check_in_session_frame, finish
 
 work = sys.argv[1]
-loc = json.load(open(f"{work}/loc/report.json")).get("localization", {})
-check(loc.get("localized") is True, f"the node localized in the session ({loc.get('last_reason')})")
-check(0 <= loc.get("first_localized_s", -1) < 3, f"within 3 s of its first message ({loc.get('first_localized_s')} s)")
+loc = check_found_in_session(work, "loc")
 check(loc.get("pose_hints") == 1 and loc.get("pose_hints_refuted") == 1 and loc.get("localized_at_end") is True,
       f"the hint 50 m off was taken and refuted ({loc.get('pose_hints')}, {loc.get('pose_hints_refuted')})")
 check_in_session_frame(work, "loc", "in the session's map frame, the hint notwithstanding")

@@ -132,12 +132,12 @@ Features OnlineCalibration::placedAtEstimate(Features f, const Eigen::Vector3d& 
                                              const Eigen::Vector3d& w_body) const {
   for (std::size_t j = 0; j < refined_.size(); ++j) {
     const auto k = static_cast<Eigen::Index>(kParams * j);
-    const Eigen::Isometry3d& given = given_[refined_[j].lidar].T_imu_sensor;
-    const Eigen::Isometry3d applied = shiftedBy(x_[k + 6], v_body, w_body) * corrected(given, x_.segment<kParams>(k));
-    const Eigen::Isometry3d estimated =
-        shiftedBy(estimate_[k + 6], v_body, w_body) * corrected(given, estimate_.segment<kParams>(k));
+    const std::size_t lidar = refined_[j].lidar;
+    const Eigen::Isometry3d applied = clockShift(lidar, v_body, w_body) * extrinsic(lidar);
+    const Eigen::Isometry3d estimated = shiftedBy(estimate_[k + 6], v_body, w_body) *
+                                        corrected(given_[lidar].T_imu_sensor, estimate_.segment<kParams>(k));
     const Eigen::Isometry3d move = estimated * applied.inverse();
-    const auto source = static_cast<std::uint8_t>(refined_[j].lidar);
+    const auto source = static_cast<std::uint8_t>(lidar);
     for (std::size_t i = 0; i < f.planes.size(); ++i)
       if (f.plane_source[i] == source) f.planes[i] = move * f.planes[i];
     for (std::size_t i = 0; i < f.edges.size(); ++i)
