@@ -121,16 +121,16 @@ void bind(YamlBinder& b, estimator::OnlineCalibrationConfig& c) {
   b.field("prior_sigma_translation_m", c.prior_sigma_translation_m,
           "how far the given extrinsic's translation along the IMU's x and y may be off, m (0: kept as given)");
   b.field("prior_sigma_translation_z_m", c.prior_sigma_translation_z_m,
-          "... and along its z, m (0: kept as given; floors and ceilings are all that observe it from a ground "
-          "robot, and its estimate there was found biased)");
+          "... and along its z, m (0: kept as given; from a ground robot only floors and ceilings observe it)");
   b.field("memory_s", c.memory_s, "older sweeps' evidence fades with this time constant, s");
   b.field("apply", c.apply,
           "apply corrections while running, as they are determined (live nodes; mmlio run with rerun: false); "
           "off: only estimated and reported, as a correction mid-run can leave the map inconsistent");
   b.field("rerun", c.rerun,
           "mmlio run: when the run settles on a calibration off from the one it started from by 2 ms, 0.1 deg or "
-          "5 mm, run the bag again from it, at most 3 passes (what was mapped before the motion determined it "
-          "stays in the map otherwise)");
+          "5 mm, run the bag twice more: once with the refined LiDARs measured from there but left out of the "
+          "odometry (their error pulls the poses they are measured at), then with every LiDAR from what that "
+          "found (what was mapped before the motion determined it stays in the map otherwise)");
 }
 
 void bindLoop(YamlBinder& b, backend::MappingConfig& c) {

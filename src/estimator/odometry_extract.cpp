@@ -89,7 +89,7 @@ Features Odometry::Impl::extract(lidar::AlignedSweep& sweep, const lidar::SweepM
     const bool keep_for_judgement = stats[i].bad_frame && cfg.bad_frame.by_information;
     if (keep_for_judgement) edge_poor[source] = 1;
     dropped[i] = stats[i].bad_frame && !keep_for_judgement;
-    if (!dropped[i]) {
+    if (!dropped[i] && !calibration.measuresOnly(source)) {
       toBody(clouds[i].edges, keep_for_judgement ? &judged_edges[source] : &edges);
       toBody(surface_points[i] ? deskewed[i].points : clouds[i].planes,
              keep_for_judgement ? &judged_planes[source] : &planes);
@@ -102,7 +102,7 @@ Features Odometry::Impl::extract(lidar::AlignedSweep& sweep, const lidar::SweepM
     view = std::make_shared<SweepView>();
     view->stamp_ns = sweep.end_ns;
     for (std::size_t i = 0; i < views.size(); ++i)
-      if (!dropped[i]) view->sensors.push_back(std::move(views[i]));
+      if (!dropped[i] && !calibration.measuresOnly(views[i].source)) view->sensors.push_back(std::move(views[i]));
   }
 
   Features f;

@@ -192,11 +192,18 @@ RunResult runPass(const RunOptions& options) {
   return result;
 }
 
-// A refined calibration worth a second pass: off from the given one by more than these.
+// A refined calibration worth running the bag again: off from the given one by more than these,
+// counting only what differs from it by more than kRerunSigmas of its standard deviation (a height
+// seen on a few floors and ceilings moves by its noise).
 constexpr double kRerunClockS = 0.002;
 constexpr double kRerunRotationRad = 0.1 * M_PI / 180.0;
 constexpr double kRerunTranslationM = 0.005;
-constexpr int kMaxPasses = 3;
+constexpr double kRerunSigmas = 2.0;
+
+/// v with the components within kRerunSigmas of their sigmas zeroed.
+Eigen::Vector3d significant(const Eigen::Vector3d& v, const Eigen::Vector3d& sigma) {
+  return (v.array().abs() > kRerunSigmas * sigma.array()).select(v, Eigen::Vector3d::Zero());
+}
 
 /// The calibration a next run should start from: the given one with what the run settled on.
 config::RigConfig withRefinedCalibration(config::RigConfig cfg,
@@ -215,8 +222,11 @@ std::string significantChange(const std::vector<RunReport::RefinedCalibration>& 
   std::ostringstream what;
   for (const RunReport::RefinedCalibration& c : refined) {
     const estimator::LidarCalibrationEstimate& e = c.last;
-    if (std::abs(e.settled_time_offset_s) < kRerunClockS && e.settled_rotation_rad.norm() < kRerunRotationRad &&
-        e.settled_translation_m.norm() < kRerunTranslationM)
+    const double clock =
+        std::abs(e.settled_time_offset_s) > kRerunSigmas * e.time_offset_sigma_s ? e.settled_time_offset_s : 0.0;
+    if (std::abs(clock) < kRerunClockS &&
+        significant(e.settled_rotation_rad, e.rotation_sigma_rad).norm() < kRerunRotationRad &&
+        significant(e.settled_translation_m, e.translation_sigma_m).norm() < kRerunTranslationM)
       continue;
     what.precision(3);
     what << (what.tellp() > 0 ? "; " : "") << c.given.name << ": clock offset " << 1e3 * e.settled_time_offset_s
@@ -251,25 +261,45 @@ RunResult runBag(const RunOptions& options) {
   if (rerun) pass.config.estimator.online_calibration.apply = false;
   RunResult result = runPass(pass);
   config::RigConfig result_config = options.config;  // the calibration `result` started from
-  // Each pass starts from the calibration the one before settled on, until it settles on the one it
-  // started from. Not for replays (a soak test) or a run that did not end normally.
-  for (int passes = 1; passes < kMaxPasses && rerun && result.complete && !result.interrupted; ++passes) {
-    const std::vector<RunReport::RefinedCalibration>& refined = result.report.online_calibration;
-    const std::string change = significantChange(refined);
-    if (change.empty()) break;
-    log::info("online calibration settled on ", change, ": running the bag again from it (online_calibration.rerun)");
-    if (pass.first_pass_calibration.empty()) pass.first_pass_calibration = refined;
-    pass.config = withRefinedCalibration(pass.config, refined);
-    pass.pass = passes + 1;
-    pass.write_if_interrupted = false;  // an interrupted pass leaves the outputs of the one before
-    RunResult next = runPass(pass);
-    if (next.interrupted) {
-      log::warn("interrupted in pass ", passes + 1, ": the outputs of pass ", passes, " stand");
+  const std::string change = rerun && result.complete && !result.interrupted
+                                 ? significantChange(result.report.online_calibration)
+                                 : std::string();
+  if (!change.empty()) {
+    // A LiDAR off by this much pulls the poses the solid-state map is built at toward its error, and
+    // a pass that runs with it measures only part of the error. So the bag is run again with the
+    // refined LiDARs measured but left out of the odometry, from what this pass settled on; the
+    // last pass runs with every LiDAR from what that measuring pass found.
+    log::info("online calibration settled on ", change,
+              ": measuring it again without its pull (online_calibration.rerun)");
+    pass.first_pass_calibration = result.report.online_calibration;
+    pass.config = withRefinedCalibration(pass.config, result.report.online_calibration);
+    RunOptions measuring = pass;
+    measuring.config.estimator.online_calibration.measure_only = true;
+    measuring.out_dir.clear();  // the first pass's outputs stand until the last pass replaces them
+    measuring.gt_path.clear();
+    measuring.pass = 2;
+    const RunResult measured = runPass(measuring);
+    if (measured.interrupted) {
+      log::warn("interrupted while measuring the calibration: the outputs of pass 1 stand");
       result.interrupted = true;
-      break;
+    } else {
+      if (measured.complete && measured.untrusted.empty())
+        pass.config = withRefinedCalibration(pass.config, measured.report.online_calibration);
+      else
+        log::warn("the measuring pass ",
+                  measured.complete ? "is untrusted (" + measured.untrusted : "ended early (" + measured.error,
+                  "): the last pass runs from what pass 1 settled on");
+      pass.pass = 3;
+      pass.write_if_interrupted = false;  // an interrupted pass leaves the outputs of the one before
+      RunResult last = runPass(pass);
+      if (last.interrupted) {
+        log::warn("interrupted in pass 3: the outputs of pass 1 stand");
+        result.interrupted = true;
+      } else {
+        result = std::move(last);
+        result_config = pass.config;
+      }
     }
-    result = std::move(next);
-    result_config = pass.config;
   }
   if (!options.out_dir.empty() && !result.report.online_calibration.empty())
     writeRefinedCalibration(options.out_dir + "/calibration_refined.yaml", result_config,

@@ -149,13 +149,15 @@ TEST(OnlineCalibration, LeavesARightCalibrationWhereItIs) {
   EXPECT_LT(e.rotation_rad.norm(), 0.05 * kDeg);
 }
 
-TEST(OnlineCalibration, KeepsTheHeightAsGivenByDefault) {
+TEST(OnlineCalibration, KeepsTheHeightAsGivenWhenItsSigmaIsZero) {
   Rig truth = spinningMount();
   truth.clock_error_s = -0.015;
   Eigen::Isometry3d given = truth.T_imu_spinning;
   given.translation() += Eigen::Vector3d(0.01, -0.01, 0.01);
   OnlineCalibrationConfig cfg;
   cfg.apply = true;
+  EXPECT_GT(cfg.prior_sigma_translation_z_m, 0.0);  // refined by default
+  cfg.prior_sigma_translation_z_m = 0.0;
   const OnlineCalibration calib = drive(truth, givenAs(given), cfg, 300, 3);
   const LidarCalibrationEstimate e = calib.estimates().at(0);
   EXPECT_LT(std::abs(e.translation_m.z()), 1e-5);

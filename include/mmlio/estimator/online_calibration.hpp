@@ -27,19 +27,23 @@ namespace mmlio::estimator {
 
 struct OnlineCalibrationConfig {
   bool enabled = true;
-  double prior_sigma_time_s = 0.05;          // how far the given clock offset may be off
-  double prior_sigma_rotation_deg = 2.0;     // ... the given extrinsic's rotation
-  double prior_sigma_translation_m = 0.05;   // ... its translation along the IMU's x and y (0: kept as given)
-  double prior_sigma_translation_z_m = 0.0;  // ... and along z (0: kept as given)
-  double memory_s = 60.0;                    // older sweeps' information fades with this time constant
+  double prior_sigma_time_s = 0.05;           // how far the given clock offset may be off
+  double prior_sigma_rotation_deg = 2.0;      // ... the given extrinsic's rotation
+  double prior_sigma_translation_m = 0.05;    // ... its translation along the IMU's x and y (0: kept as given)
+  double prior_sigma_translation_z_m = 0.05;  // ... and along z (0: kept as given)
+  double memory_s = 60.0;                     // older sweeps' information fades with this time constant
   // Offline (mmlio run): when the run ends with a calibration that differs from the given one (2 ms,
-  // 0.1 deg, 5 mm), the bag is run again from it. Read by the runner, not the odometry.
+  // 0.1 deg, 5 mm), the bag is measured again from it (measure_only), then run from what that found.
+  // Read by the runner, not the odometry.
   bool rerun = true;
   // Corrections go into the de-skew and placement as they are determined. Off by default: applied
   // mid-run, a correction leaves the map built before it inconsistent with what follows (a stairs
   // run went from 4.8 cm ATE with the same calibration fixed to 47 cm); mmlio run re-runs the bag
   // instead (rerun), the live nodes report the estimate. Ignored by mmlio run while rerun is on.
   bool apply = false;
+  // The refined LiDARs' points stay out of the odometry (registration, window, map): the pass
+  // measures their calibration against the anchor alone, unpulled by their own error.
+  bool measure_only = false;
 };
 
 /// One refined LiDAR's correction of its given calibration, and its standard deviations.
@@ -79,6 +83,8 @@ class OnlineCalibration {
   bool active() const { return active_; }
   std::size_t anchor() const { return static_cast<std::size_t>(anchor_); }
   bool refines(std::size_t lidar) const { return active_ && refine_[lidar]; }
+  /// LiDAR i only measured, not used by the odometry (measure_only).
+  bool measuresOnly(std::size_t lidar) const { return refines(lidar) && cfg_.measure_only; }
 
   /// LiDAR i's calibrated extrinsic with the current correction (the given one where not refined).
   Eigen::Isometry3d extrinsic(std::size_t lidar) const;
