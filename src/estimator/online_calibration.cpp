@@ -30,6 +30,10 @@ constexpr double kDeterminedTranslationM = 3e-3;
 // ... or below kRoughly times these when the estimate is more than 3 sigma from what is applied: a
 // given calibration that is clearly off is corrected before the motion has pinned the correction down.
 constexpr double kRoughly = 3.0;
+// Applied mid-run, a height (seen only on floors and ceilings) moves everything mapped after it: it
+// is applied only when this much better determined than the other translations.
+constexpr double kAppliedHeightStricter = 3.0;
+constexpr Eigen::Index kHeight = 5;     // the translation's z in [rotation 3, translation 3, clock]
 constexpr double kKeptAfterMove = 0.1;  // of the evidence gathered before the correction moved
 
 /// Every k-th feature of each LiDAR so that none has more than max_per_lidar.
@@ -284,7 +288,7 @@ void OnlineCalibration::applyDetermined() {
   for (std::size_t j = 0; j < refined_.size(); ++j) {
     const auto k = static_cast<Eigen::Index>(kParams * j);
     for (Eigen::Index i = 0; i < kParams; ++i) {
-      const double threshold = determinedBelow(i);
+      const double threshold = i == kHeight ? determinedBelow(i) / kAppliedHeightStricter : determinedBelow(i);
       const double s = sigma[k + i], change = std::abs(estimate_[k + i] - x_[k + i]);
       if (s <= threshold || (s <= kRoughly * threshold && change > 3.0 * s)) x_[k + i] = estimate_[k + i];
     }
