@@ -46,7 +46,9 @@ Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> symmetricEigen(const Eigen::Matri
 
 MarginalizationInfo::MarginalizationInfo(double eigenvalue_floor) : eigenvalue_floor_(eigenvalue_floor) {}
 
-MarginalizationInfo::~MarginalizationInfo() {
+MarginalizationInfo::~MarginalizationInfo() { releaseFactors(); }
+
+void MarginalizationInfo::releaseFactors() {
   std::unordered_set<ceres::CostFunction*> costs;
   std::unordered_set<ceres::LossFunction*> losses;
   for (auto& f : factors_) {
@@ -55,6 +57,7 @@ MarginalizationInfo::~MarginalizationInfo() {
   }
   for (auto* c : costs) delete c;
   for (auto* l : losses) delete l;
+  factors_ = {};
 }
 
 void MarginalizationInfo::addResidualBlock(ResidualBlockInfo info) {
@@ -165,6 +168,10 @@ void MarginalizationInfo::marginalize() {
   J_ = s_sqrt.asDiagonal() * eig.eigenvectors().transpose();
   r0_ = s_inv_sqrt.asDiagonal() * eig.eigenvectors().transpose() * g_prior;
   valid_ = n > 0 && J_.allFinite() && r0_.allFinite();
+  // The prior is (J, r0) from here on. Kept, the factors would hold every match of the dropped
+  // keyframe, and the previous prior's factor the previous prior: a chain as long as the run.
+  releaseFactors();
+  pre_marginalized_ = false;
 }
 
 std::vector<double*> MarginalizationInfo::keptBlockAddresses(const std::unordered_map<long, double*>& shift) const {

@@ -195,6 +195,12 @@ TEST(Marginalization, TwoWindowSlidesWithMovedStorageStillGiveTheFullEstimate) {
   info2->marginalize();
   ASSERT_TRUE(info2->valid());
   EXPECT_EQ(info2->keptTangentSize(), 6);
+  // A prior is its (J, r0): marginalising releases the factors, and with them the prior before,
+  // so the priors of a long run do not chain up in memory.
+  EXPECT_EQ(info2->numResidualBlocks(), 0);
+  const std::weak_ptr<const MarginalizationInfo> first = info1;
+  info1.reset();
+  EXPECT_TRUE(first.expired());
 
   ceres::Problem problem;
   problem.AddResidualBlock(new MarginalizationFactor(info2), nullptr, info2->keptBlockAddresses({}));

@@ -81,9 +81,12 @@ class MarginalizationInfo {
   int droppedTangentSize() const { return dropped_dim_; }
   const Eigen::MatrixXd& linearizedJacobian() const { return J_; }   // kept_dim x kept_dim
   const Eigen::VectorXd& linearizedResidual() const { return r0_; }  // kept_dim
+  /// Residual blocks added and not yet marginalized (marginalize() releases them).
   int numResidualBlocks() const { return static_cast<int>(factors_.size()); }
 
  private:
+  void releaseFactors();  // deletes each distinct cost and loss once
+
   struct Factor {
     ResidualBlockInfo info;
     Eigen::VectorXd residual;                // after loss correction
