@@ -1,8 +1,11 @@
 #pragma once
 // Hand-off between the ROS callbacks (producers, never blocked) and the one processing thread
 // (consumer). Bounded per class of item: a burst of point clouds while a slow sweep is being
-// estimated is dropped at the door (and counted) instead of growing memory or stalling the
-// spinner, and IMU samples have their own, larger budget so they are not crowded out by clouds.
+// estimated is dropped (and counted) instead of growing memory or stalling the spinner, and IMU
+// samples have their own, larger budget so they are not crowded out by clouds. A class that evicts
+// its oldest drops the oldest waiting item for a new one (a node that falls behind then works on
+// the newest sweeps, at a bounded lag); the others drop the new item at the door.
+#include <algorithm>
 #include <array>
 #include <condition_variable>
 #include <cstddef>
@@ -13,14 +16,23 @@ namespace mmlio::live {
 
 template <class T, std::size_t NumClasses> class BoundedQueue {
  public:
-  /// capacity[c]: most items of class c waiting at once.
-  explicit BoundedQueue(std::array<std::size_t, NumClasses> capacity) : capacity_(capacity) {}
+  /// capacity[c]: most items of class c waiting at once; evicts_oldest[c]: a full class c drops
+  /// its oldest waiting item for a new one (else the new one).
+  explicit BoundedQueue(std::array<std::size_t, NumClasses> capacity, std::array<bool, NumClasses> evicts_oldest = {})
+      : capacity_(capacity), evicts_oldest_(evicts_oldest) {}
 
-  /// False (item dropped, drop counter of its class incremented) when class `c` is full or
-  /// the queue is closed. Never blocks on the consumer.
+  /// False when `item` was dropped: class `c` is full and keeps what waits, or the queue is
+  /// closed. An eviction of an older item returns true. Every drop counts for its class. Never
+  /// blocks on the consumer.
   bool push(std::size_t c, T item) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
+      if (!closed_ && queued_[c] >= capacity_[c] && evicts_oldest_[c] && capacity_[c] > 0) {
+        const auto oldest = std::find_if(items_.begin(), items_.end(), [c](const Entry& e) { return e.cls == c; });
+        items_.erase(oldest);
+        --queued_[c];
+        ++dropped_[c];
+      }
       if (closed_ || queued_[c] >= capacity_[c]) {
         ++dropped_[c];
         return false;
@@ -70,6 +82,7 @@ template <class T, std::size_t NumClasses> class BoundedQueue {
   std::condition_variable ready_;
   std::deque<Entry> items_;
   std::array<std::size_t, NumClasses> capacity_;
+  std::array<bool, NumClasses> evicts_oldest_;
   std::array<std::size_t, NumClasses> queued_{};
   std::array<std::size_t, NumClasses> dropped_{};
   bool closed_ = false;

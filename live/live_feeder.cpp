@@ -45,7 +45,8 @@ LiveFeeder::LiveFeeder(const config::RigConfig& cfg, FeederOptions options, Outl
     : options_(checked(std::move(options))),
       outlet_(outlet),
       queue_(
-          {static_cast<std::size_t>(options_.max_queued_imu), static_cast<std::size_t>(options_.max_queued_scans), 8}),
+          {static_cast<std::size_t>(options_.max_queued_imu), static_cast<std::size_t>(options_.max_queued_scans), 8},
+          {false, true, false}),  // behind, the oldest sweeps go first; never IMU, never a request
       imu_gate_(cfg.imu.topic, cfg.imu.acc_unit),
       system_(cfg, options_.mode, [this](const estimator::SweepResult& r) { onSweep(r); }) {
   if (!options_.session_dir.empty() && !options_.out_dir.empty() &&

@@ -4,6 +4,7 @@
 
 #include <cstring>
 #include <string>
+#include <vector>
 
 #include "bounded_queue.hpp"
 #include "imu_unit_gate.hpp"
@@ -22,6 +23,24 @@ TEST(BoundedQueue, AFullClassDropsItsNewItemsButNotTheOtherClass) {
   EXPECT_EQ(q.dropped(0), 1u);
   EXPECT_EQ(q.dropped(1), 1u);
   EXPECT_EQ(q.size(), 4u);
+}
+
+// LiDAR messages, behind: the oldest waiting one goes for the newest (a bounded lag), and IMU
+// samples are neither evicted for it nor evicted themselves.
+TEST(BoundedQueue, AClassThatEvictsDropsItsOldestWaitingItemForTheNewOne) {
+  BoundedQueue<int, 2> q({2, 2}, {false, true});
+  q.push(0, 1);
+  q.push(1, 10);
+  q.push(0, 2);
+  q.push(1, 11);
+  EXPECT_TRUE(q.push(1, 12));  // 10 goes
+  EXPECT_FALSE(q.push(0, 3));  // IMU full: the new one is dropped
+  EXPECT_EQ(q.dropped(1), 1u);
+  EXPECT_EQ(q.dropped(0), 1u);
+  std::vector<int> order;
+  q.close();
+  for (int v = 0; q.pop(&v);) order.push_back(v);
+  EXPECT_EQ(order, (std::vector<int>{1, 2, 11, 12}));
 }
 
 TEST(BoundedQueue, PopsInArrivalOrderAndFreesTheSlotOfItsClass) {
