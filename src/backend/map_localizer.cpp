@@ -39,7 +39,8 @@ void MapLocalizer::addKeyframe(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_b
     if (relocalize(stamp_ns, T_odom_body, cloud_body) || !was_localized) return;
     ++status_.pose_hints_refuted;
     T_map_odom_hint_.reset();  // tracking goes on in the map <- odom it had
-    log::warn("the pose hint does not fit the session map there (", status_.last_reason, "): tracking goes on");
+    status_.last_reason = "a pose hint did not fit the map there (" + status_.last_reason + "): tracking went on";
+    log::warn(status_.last_reason);
   }
   if (status_.localized)
     track(stamp_ns, T_odom_body, cloud_body);

@@ -114,6 +114,7 @@ TEST(MapLocalizer, APoseHintFindsTheRigAtTheNextKeyframeAndARefutedOneChangesNot
   EXPECT_EQ(s.pose_hints, 2);
   EXPECT_EQ(s.pose_hints_refuted, 1);
   EXPECT_EQ(s.keyframes_fitted, 1);  // the third keyframe was tracked as usual
+  EXPECT_EQ(s.last_reason.rfind("a pose hint did not fit the map there (", 0), 0u) << s.last_reason;
   EXPECT_LT(errorM(localizer, fromSec(3), T_odom_map * third, third), 0.05);
 }
 
