@@ -76,10 +76,29 @@ bool RunReport::inputDegraded() const {
 
 std::string RunReport::inputStatus() const {
   if (!inputDegraded()) return "complete";
+  std::vector<std::string> causes;
+  const auto count = [&](std::size_t n, const std::string& what) {
+    if (n > 0) causes.push_back(std::to_string(n) + " " + what);
+  };
   const std::string losses = lidarStreamLosses(input);
-  return "degraded: " + (losses.empty() ? std::string() : losses + " (input.lidar_streams); ") +
-         "input dropped or re-timed (see input.imu_dropped, input.scans_dropped, input.queue_dropped, "
-         "input.skipped_messages, input.truncated, input.damaged_chunks, input.time_base_jumps)";
+  if (!losses.empty()) causes.push_back(losses + " (input.lidar_streams)");
+  if (input.imu_dropped.total() > 0) {
+    std::string imu = std::to_string(input.imu_dropped.total()) + " IMU samples dropped (input.imu_dropped)";
+    if (input.imu_stream.missing > 0)
+      imu += ", " + std::to_string(input.imu_stream.missing) + " missing (input.imu_stream.gaps)";
+    causes.push_back(imu);
+  }
+  count(input.scans_out_of_order + input.scans_stamp_jumps,
+        "LiDAR scans out of order or off in time (input.scans_dropped)");
+  count(input.queue_dropped_scans + input.queue_dropped_imu,
+        "messages dropped by the node's queue, behind the sensors (input.queue_dropped)");
+  count(input.skipped_messages, "messages that did not decode (input.skipped_messages)");
+  count(input.damaged_chunks, "damaged stretches of the bag skipped (input.damaged_chunks)");
+  count(input.time_base_jumps.size(), "jumps of the whole stream's time base (input.time_base_jumps)");
+  if (input.truncated) causes.emplace_back("the bag is truncated (input.truncated)");
+  std::string out = "degraded: ";
+  for (std::size_t i = 0; i < causes.size(); ++i) out += (i > 0 ? "; " : "") + causes[i];
+  return out;
 }
 
 Json toJson(const RunReport& r) {

@@ -139,5 +139,21 @@ TEST(RunReport, MappingStatesLoopClosureAndABackEndFailure) {
   EXPECT_NE(toMarkdown(r).find("out of memory"), std::string::npos);
 }
 
+// The status names each cause of a degraded input, with its count and where to look, and none
+// that did not happen (an IMU driver that restarted and a node behind its sensors, here).
+TEST(RunReport, InputStatusNamesEachCauseItHas) {
+  RunReport r;
+  EXPECT_EQ(r.inputStatus(), "complete");
+  r.input.imu_dropped.jumped = 1;
+  r.input.imu_stream.missing = 1019;
+  r.input.queue_dropped_scans = 3;
+  const std::string status = r.inputStatus();
+  EXPECT_EQ(status.rfind("degraded: ", 0), 0u) << status;
+  EXPECT_NE(status.find("1 IMU samples dropped (input.imu_dropped), 1019 missing"), std::string::npos) << status;
+  EXPECT_NE(status.find("3 messages dropped by the node's queue"), std::string::npos) << status;
+  for (const char* absent : {"truncated", "damaged", "time base", "decode", "scans missing", "out of order"})
+    EXPECT_EQ(status.find(absent), std::string::npos) << absent << ": " << status;
+}
+
 }  // namespace
 }  // namespace mmlio::pipeline
