@@ -4,7 +4,8 @@
 # node publishes. Checks the topics' types and rates, the tf tree map -> odom -> imu, the ~save_map
 # service, that the node's odometry equals `mmlio run`'s on the same bag and that its loop-corrected
 # trajectory scores within 5 % of it, with the loops listed in its report. Then a node localizing in
-# the session `mmlio run` wrote, and one killed by SIGKILL and restarted on its autosave.
+# the session `mmlio run` wrote, and one killed by SIGKILL and restarted on its autosave; then the
+# bag played again from its start into a running node (its clock goes back 30 s).
 # Usage: live_node_test.sh MMLIO MMLIO_NODE CONFIG_DIR
 set -euo pipefail
 MMLIO="$1" NODE="$2" CONFIG_DIR="$3"
@@ -170,6 +171,47 @@ loc = json.load(open(f"{work}/resumed/report.json")).get("localization", {})
 check(loc.get("localized") is True and loc.get("localized_at_end") is True,
       f"the restarted node localized in the autosave ({loc.get('last_reason')})")
 check_in_session_frame(work, "resumed", "past the crash point too")
+finish()
+PY
+
+# `rosbag play` restarted: the same bag again into a running node, its stamps 30 s back. The route
+# ends where it starts, so the node goes on from where the rig is, in the same world, and says so.
+stdbuf -oL -eL "$NODE" __name:=mmlio_again _config:="$CONFIG_DIR/hvi.yaml" _calib:="$truth" \
+  _out_dir:="$work/again" > "$work/again_node.log" 2>&1 &
+again_pid=$!
+pids+=($again_pid)
+wait_for 30 rostopic info /mmlio_again/odometry || fail "the node for the replayed bag never advertised its odometry"
+for pass in 1 2; do
+  rosbag play -q -r 2 --wait-for-subscribers "$bag" > "$work/play_again_$pass.log" 2>&1 || fail "rosbag play (pass $pass)"
+done
+sleep 3
+stop_node "$again_pid"
+python3 - "$work" << 'PY' > "$work/again_second.tum" || fail "the replayed bag's trajectory"
+import sys
+from live_checks import read_tum
+odo = read_tum(f"{sys.argv[1]}/again/trajectory_odometry.tum")
+back = next((i for i in range(1, len(odo)) if float(odo[i][0]) < float(odo[i - 1][0])), len(odo))
+print("\n".join(" ".join(r) for r in odo[back:]))
+PY
+again_ate=$(ate "$MMLIO" "$work/again_second.tum")
+run_odo_ate=$(ate "$MMLIO" "$work/run/trajectory_odometry.tum")
+python3 - "$work" "$again_ate" "$run_odo_ate" << 'PY' || fail "replayed bag checks above"
+import json, math, sys
+from live_checks import check, finish, read_tum
+
+work, again_ate, run_ate = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])  # odometry, both
+report = json.load(open(f"{work}/again/report.json"))
+jumps = report["input"]["time_base_jumps"]
+check(len(jumps) == 1 and -31.0 < jumps[0]["shift_s"] < -29.0, f"one jump of the time base, 30 s back ({jumps})")
+check(report["status"].startswith("degraded") and "time base" in report["status"], f"the report says so ({report['status'][:90]})")
+odo = read_tum(f"{work}/again/trajectory_odometry.tum")
+run = read_tum(f"{work}/run/trajectory_odometry.tum")
+second = read_tum(f"{work}/again_second.tum")
+check(len(second) >= 0.95 * len(run), f"the second pass tracked ({len(second)} poses; mmlio run {len(run)})")
+first = {r[0]: [float(x) for x in r[1:4]] for r in odo[: len(odo) - len(second)]}
+apart = max((math.dist(first[r[0]], [float(x) for x in r[1:4]]) for r in second if r[0] in first), default=1.0)
+check(apart < 0.05, f"both passes in one world: the second within {100 * apart:.2f} cm of the first")
+check(again_ate <= 1.5 * run_ate + 1e-4, f"second pass ATE {100 * again_ate:.2f} cm (mmlio run {100 * run_ate:.2f} cm)")
 finish()
 PY
 echo "PASS"

@@ -5,7 +5,8 @@
 # the topics' frames and rates, that the odometry the peer received scores like `mmlio run`'s (ATE at
 # most 1.2 cm, and within 5 % of it), that the node's own odometry equals `mmlio run`'s, the
 # save_map service called as rmw_fastrtps clients call it, and the outputs written on SIGINT; then
-# the node localizing in the session `mmlio run` wrote; then a LiDAR driver that stops and restarts.
+# the node localizing in the session `mmlio run` wrote; then a LiDAR's and the IMU's drivers stopping
+# and restarting.
 # Usage: live_ros2_test.sh MMLIO MMLIO_ROS2 ROS2_PLAY ROS2_SAVE_MAP CYCLONE_LISTEN CONFIG_DIR
 set -euo pipefail
 MMLIO="$1" NODE="$2" PLAY="$3" SAVE="$4" LISTEN="$5" CONFIG_DIR="$6"
@@ -99,14 +100,15 @@ check_in_session_frame(work, "loc", "in the session's map frame")
 finish()
 PY
 
-# The spinning LiDAR's driver stops 12 s in for 5 s and restarts (a new participant and writer): the
-# node rides on the solid-state LiDAR meanwhile and says which LiDAR went missing, and when.
+# The spinning LiDAR's driver stops 12 s in for 5 s and restarts (a new participant and writer), then
+# the IMU's 22 s in for 2 s: the node rides on the solid-state LiDAR, then on the LiDARs alone, and
+# says which stream went missing, and when.
 stdbuf -oL -eL "$NODE" --config "$CONFIG_DIR/hvi.yaml" --calib "$truth" --out-dir "$work/pause" \
   > "$work/pause_node.log" 2>&1 &
 pause_pid=$!
 pids+=($pause_pid)
-PAUSE=/velodyne_points:12:5 "$PLAY" "$ROS_DOMAIN_ID" "$bag" 1 livox_ros_driver2/msg/CustomMsg \
-  > "$work/play_pause.log" 2>&1 || fail "ros2_play (driver restart)"
+PAUSE=/velodyne_points:12:5,/livox/imu:22:2 "$PLAY" "$ROS_DOMAIN_ID" "$bag" 1 livox_ros_driver2/msg/CustomMsg \
+  > "$work/play_pause.log" 2>&1 || fail "ros2_play (driver restarts)"
 sleep 3
 stop_node "$pause_pid"
 pause_ate=$(ate "$MMLIO" "$work/pause/trajectory_odometry.tum")
@@ -122,11 +124,17 @@ gaps = [g for g in velodyne["gaps"] if 11.0 < g["after_s"] - t0 < 13.0 and g["mi
 check(len(gaps) == 1, f"the velodyne's 5 s silence is one gap 12 s in ({velodyne['gaps']})")
 check(report["status"].startswith("degraded") and "velodyne scans missing" in report["status"],
       f"the run is degraded and names the LiDAR ({report['status'][:90]})")
+imu = report["input"]["imu_stream"]
+imu_gaps = [g for g in imu["gaps"] if 21.5 < g["after_s"] - t0 < 22.5 and g["missing"] >= 300]
+check(len(imu_gaps) == 1, f"the IMU's 2 s silence is one gap 22 s in ({imu['gaps']})")
+check("IMU" in report["status"], f"... and the status names it ({report['status'][:160]})")
 odo = read_tum(f"{work}/pause/trajectory_odometry.tum")
 during = [p for p in odo if 12.5 < float(p[0]) - t0 < 16.5]
 check(len(during) >= 35, f"odometry goes on while the velodyne is silent ({len(during)} poses in 4 s)")
-# Five seconds on the solid-state LiDAR alone cost some accuracy (HI is 2 cm in this office), not the run.
-check(pause_ate <= 2.0 * run_ate, f"ATE {100 * pause_ate:.2f} cm across the restart, within 2x mmlio run's {100 * run_ate:.2f} cm")
+during = [p for p in odo if 22.5 < float(p[0]) - t0 < 23.5]
+check(len(during) >= 8, f"... and while the IMU is ({len(during)} poses in 1 s)")
+# Seconds on one LiDAR, then on the LiDARs alone, cost some accuracy (HI is 2 cm in this office), not the run.
+check(pause_ate <= 2.0 * run_ate, f"ATE {100 * pause_ate:.2f} cm across the restarts, within 2x mmlio run's {100 * run_ate:.2f} cm")
 finish()
 PY
 echo "PASS"

@@ -3,17 +3,22 @@
 // drivers' sensor-data QoS (best effort, keep last 5), at RATE times the bag's pace. Starts once
 // every topic has a reader (the node), waits 30 s at most for them. TRANSPORT (dds_transport.hpp)
 // is Fast DDS's default unless given: a driver on rmw_fastrtps without a profile. With PAUSE
-// (TOPIC:FROM_S:SECONDS), TOPIC's driver stops FROM_S seconds into the bag for SECONDS and then
-// restarts: a new participant and writer (a new process would have them) publish the rest.
-// Usage: [PAUSE=TOPIC:FROM_S:SECONDS] ros2_play DOMAIN BAG RATE LIVOX_TYPE [udp|shm|default]
+// (TOPIC:FROM_S:SECONDS, several separated by commas), TOPIC's driver stops FROM_S seconds into the
+// bag for SECONDS and then restarts: a new participant and writer (a new process would have them)
+// publish the rest. With LOOP=N the bag is played N times, each pass with the bag's own stamps (as
+// `rosbag play -l`: the clock goes back at every restart).
+// Usage: [PAUSE=...] [LOOP=N] ros2_play DOMAIN BAG RATE LIVOX_TYPE [udp|shm|default]
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <iostream>
 #include <map>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "../../tests/io/ros2_twin.hpp"
 #include "dds_transport.hpp"
@@ -22,21 +27,21 @@
 namespace {
 
 struct Pause {
-  std::string topic;  // empty: none
+  std::string topic;
   double from_s = 0, seconds = 0;
 };
 
-Pause pauseFromEnv() {
-  Pause p;
+std::vector<Pause> pausesFromEnv() {
+  std::vector<Pause> pauses;
   const char* e = std::getenv("PAUSE");
-  if (!e || !*e) return p;
-  const std::string v = e;
-  const auto a = v.rfind(':', v.rfind(':') - 1), b = v.rfind(':');
-  if (a == std::string::npos || b == std::string::npos) throw std::runtime_error("PAUSE is TOPIC:FROM_S:SECONDS");
-  p.topic = v.substr(0, a);
-  p.from_s = std::stod(v.substr(a + 1, b - a - 1));
-  p.seconds = std::stod(v.substr(b + 1));
-  return p;
+  std::stringstream list(e ? e : "");
+  for (std::string v; std::getline(list, v, ',');) {
+    const auto b = v.rfind(':');
+    const auto a = b == std::string::npos || b == 0 ? std::string::npos : v.rfind(':', b - 1);
+    if (a == std::string::npos) throw std::runtime_error("PAUSE is TOPIC:FROM_S:SECONDS[,...]");
+    pauses.push_back({v.substr(0, a), std::stod(v.substr(a + 1, b - a - 1)), std::stod(v.substr(b + 1))});
+  }
+  return pauses;
 }
 
 }  // namespace
@@ -68,25 +73,35 @@ int main(int argc, char** argv) {
         30.0);
     if (!matched) throw std::runtime_error("the node's readers did not appear within 30 s");
     std::this_thread::sleep_for(std::chrono::seconds(1));  // discovery settles on both sides
-    const Pause pause = pauseFromEnv();
-    std::unique_ptr<DdsParticipant> restarted;  // the paused topic's driver after its restart
-    const auto start = std::chrono::steady_clock::now();
+    const std::vector<Pause> pauses = pausesFromEnv();
+    std::map<std::string, std::unique_ptr<DdsParticipant>> restarted;  // a paused topic's driver after its restart
+    const char* loop_env = std::getenv("LOOP");
+    const int passes = loop_env ? std::max(1, std::atoi(loop_env)) : 1;
     const std::uint64_t t0 = records.front().time_ns;
-    for (const auto& r : records) {
-      const double t = 1e-9 * static_cast<double>(r.time_ns - t0);
-      if (r.topic == pause.topic && t >= pause.from_s) {
-        if (t < pause.from_s + pause.seconds) continue;
-        if (!restarted) {
-          restarted = std::make_unique<DdsParticipant>(domain, "ros2_play_restarted", transport);
-          writers[r.topic] = &restarted->writer(topicOnWire(r.topic), typeOnWire(r.type), sensorDataQos());
-          std::cerr << "ros2_play: " << r.topic << " restarted after " << pause.seconds << " s\n";
+    const double bag_s = 1e-9 * static_cast<double>(records.back().time_ns - t0) + 0.1;
+    const auto start = std::chrono::steady_clock::now();
+    for (int pass = 0; pass < passes; ++pass) {
+      for (const auto& r : records) {
+        const double t = 1e-9 * static_cast<double>(r.time_ns - t0);
+        const auto paused = std::find_if(pauses.begin(), pauses.end(),
+                                         [&](const Pause& p) { return p.topic == r.topic && t >= p.from_s; });
+        if (pass == 0 && paused != pauses.end()) {
+          if (t < paused->from_s + paused->seconds) continue;
+          if (!restarted.count(r.topic)) {
+            auto& driver = restarted[r.topic] =
+                std::make_unique<DdsParticipant>(domain, "ros2_play_restarted", transport);
+            writers[r.topic] = &driver->writer(topicOnWire(r.topic), typeOnWire(r.type), sensorDataQos());
+            std::cerr << "ros2_play: " << r.topic << " restarted after " << paused->seconds << " s\n";
+          }
         }
+        const double due_s = (pass * bag_s + t) / rate;
+        std::this_thread::sleep_until(start + std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 * due_s)));
+        if (!writers[r.topic]->write(r.cdr)) std::cerr << "ros2_play: DDS refused a message on " << r.topic << "\n";
       }
-      std::this_thread::sleep_until(start + std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 * t / rate)));
-      if (!writers[r.topic]->write(r.cdr)) std::cerr << "ros2_play: DDS refused a message on " << r.topic << "\n";
     }
     std::this_thread::sleep_for(std::chrono::seconds(1));  // best effort: let the last ones leave
-    std::cout << "played " << records.size() << " messages on " << writers.size() << " topics\n";
+    std::cout << "played " << records.size() * static_cast<std::size_t>(passes) << " messages on " << writers.size()
+              << " topics\n";
   } catch (const std::exception& e) {
     std::cerr << "ros2_play: " << e.what() << "\n";
     return 1;

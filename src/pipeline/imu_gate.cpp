@@ -18,6 +18,11 @@ bool ImuGate::accept(const ImuSample& s) {
   if (s.acc_m_s2.norm() > cfg_.max_acc_m_s2 || s.gyro_rad_s.norm() > cfg_.max_gyro_rad_s)
     return drop(&counts_.out_of_range, "beyond any IMU's range (50 g, 50 rad/s)");
   if (last_ns_ != std::numeric_limits<Stamp>::min()) {
+    if (back_.jumpedBack(last_ns_, s.stamp_ns)) {
+      back_.holdBack(last_ns_, s.stamp_ns);
+      return drop(&counts_.jumped, "stamp far before the previous sample (the IMU's clock went back?)");
+    }
+    back_.accepted();
     if (s.stamp_ns <= last_ns_) return drop(&counts_.out_of_order, "stamp not after the previous sample");
     if (jump_.jumped(last_ns_, s.stamp_ns)) {
       // A lone stamp far ahead is corrupt; a stream that stays there had a real gap.

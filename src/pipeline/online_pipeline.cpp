@@ -39,21 +39,17 @@ void OnlinePipeline::addImu(const ImuSample& sample) {
   ImuSample s = sample;
   s.stamp_ns -= shift_ns_;
   const Stamp last_ns = imu_gate_.lastNs();
-  if (!imu_gate_.accept(s)) return;
-  if (last_ns != std::numeric_limits<Stamp>::min()) {
+  if (!imu_gate_.accept(s)) {
+    // Gone back with every LiDAR alike (a bag played again, a clock set back): go on from here.
+    if (!imu_gate_.wentBack() || !timeBaseJumped(s.stamp_ns - last_ns)) return;
+    s.stamp_ns -= shiftTimeBase(sample.stamp_ns, s.stamp_ns - last_ns);
+    if (!imu_gate_.accept(s)) return;
+  } else if (last_ns != std::numeric_limits<Stamp>::min()) {
     const Stamp gap_ns = s.stamp_ns - last_ns;
     if (gap_ns > fromSec(kTimeBaseJumpS) && timeBaseJumped(gap_ns)) {
-      // The gate confirmed the IMU's jump on this sample, the LiDARs jumped alike: continue the
-      // stream as if only the samples the gate held back had passed.
-      const int held_back = imu_gate_.config().jump_confirmations;
-      const Stamp shift = gap_ns - held_back * std::max<Stamp>(imu_period_ns_, 1);
-      time_jumps_.push_back({sample.stamp_ns, shift_ns_ + shift});
-      log::warn("time base jumped by ", toSec(gap_ns), " s at ", log::stampText(sample.stamp_ns),
-                " s (IMU and every LiDAR together): continuing as if no time passed; outputs keep the input's stamps");
-      shift_ns_ += shift;
+      const Stamp shift = shiftTimeBase(sample.stamp_ns, gap_ns);
       s.stamp_ns -= shift;
       imu_gate_.shiftBack(shift);
-      for (auto& [sensor, jump] : scan_jumps_) jump.accepted();
     } else if (gap_ns <= fromSec(kTimeBaseJumpS)) {
       imu_period_ns_ = gap_ns;
     }
@@ -61,6 +57,20 @@ void OnlinePipeline::addImu(const ImuSample& sample) {
   imu_stream_.add("imu", s.stamp_ns);
   odometry_.addImu(s);
   drain(false);
+}
+
+Stamp OnlinePipeline::shiftTimeBase(Stamp at_ns, Stamp gap_ns) {
+  // The gate confirmed the IMU's jump on this sample: continue the stream as if only the samples
+  // the gate held back had passed.
+  const int held_back = imu_gate_.config().jump_confirmations;
+  const Stamp shift = gap_ns - held_back * std::max<Stamp>(imu_period_ns_, 1);
+  time_jumps_.push_back({at_ns, shift_ns_ + shift});
+  log::warn("time base jumped ", gap_ns > 0 ? "ahead" : "back", " by ", toSec(gap_ns > 0 ? gap_ns : -gap_ns), " s at ",
+            log::stampText(at_ns),
+            " s (IMU and every LiDAR together): continuing as if no time passed; outputs keep the input's stamps");
+  shift_ns_ += shift;
+  for (auto& [sensor, jump] : scan_jumps_) jump.accepted();
+  return shift;
 }
 
 bool OnlinePipeline::timeBaseJumped(Stamp imu_jump_ns) const {
@@ -96,10 +106,16 @@ void OnlinePipeline::addScan(LidarScan scan) {
     if ((*count)++ == 0) log::warn(scan.sensor, " scan dropped: ", why, " (further ones are counted in the report)");
   };
   if (last != last_scan_ns_.end()) {
+    // Far back: kept out unless the IMU goes back alike (then addImu shifts the time base).
+    StampJumpGuard& jump = scanJumpGuard(scan.sensor);
+    if (jump.jumpedBack(last->second, scan.start_ns)) {
+      jump.holdBack(last->second, scan.start_ns);
+      return drop(&scan_drops_.jumped, "it starts " + std::to_string(toSec(last->second - scan.start_ns)) +
+                                           " s before this LiDAR's previous scan");
+    }
     if (scan.start_ns <= last->second)
       return drop(&scan_drops_.out_of_order, "not after the previous scan of this LiDAR");
     // A lone stamp far ahead is corrupt; a LiDAR that stays there had a real gap.
-    StampJumpGuard& jump = scanJumpGuard(scan.sensor);
     if (jump.jumped(last->second, scan.start_ns) && jump.holdBack(last->second, scan.start_ns))
       return drop(&scan_drops_.jumped, "it starts " + std::to_string(toSec(scan.start_ns - last->second)) +
                                            " s after this LiDAR's previous scan");

@@ -64,11 +64,21 @@ std::string lidarStreamLosses(const RunReport::Input& in) {
   return out;
 }
 
+/// IMU samples missing in gaps that cost a sweep its motion prediction (0.05 s or more); a lone
+/// lost sample now and then does not.
+std::size_t imuGapSamples(const RunReport::Input& in) {
+  constexpr double kImuGapS = 0.05;
+  std::size_t missing = 0;
+  for (const StreamTally::Gap& g : in.imu_stream.gaps)
+    if (static_cast<double>(g.missing) * in.imu_stream.period_s >= kImuGapS) missing += g.missing;
+  return missing;
+}
+
 }  // namespace
 
 bool RunReport::inputDegraded() const {
   return input.imu_dropped.total() + input.scans_out_of_order + input.scans_stamp_jumps + input.skipped_messages +
-                 input.queue_dropped_imu + input.queue_dropped_scans >
+                 input.queue_dropped_imu + input.queue_dropped_scans + imuGapSamples(input) >
              0 ||
          input.truncated || input.damaged_chunks > 0 || !input.time_base_jumps.empty() ||
          !lidarStreamLosses(input).empty();
@@ -87,6 +97,9 @@ std::string RunReport::inputStatus() const {
     if (input.imu_stream.missing > 0)
       imu += ", " + std::to_string(input.imu_stream.missing) + " missing (input.imu_stream.gaps)";
     causes.push_back(imu);
+  } else if (imuGapSamples(input) > 0) {
+    causes.push_back(std::to_string(imuGapSamples(input)) +
+                     " IMU samples missing in gaps of 0.05 s or more (input.imu_stream.gaps)");
   }
   count(input.scans_out_of_order + input.scans_stamp_jumps,
         "LiDAR scans out of order or off in time (input.scans_dropped)");

@@ -27,10 +27,11 @@ inline config::RigConfig simRigConfig(const sim::Simulator& sim) {
 /// Replays the simulator's data in stamp order, as a bag stores it. `edit` may corrupt a scan (by
 /// its index among all scans fed) and `edit_imu` an IMU sample (by index) just before it is fed,
 /// after the order was decided: a corrupt header stamp does not move a message in a bag.
-/// Sink: an OnlinePipeline or a System (addImu, addScan, flush).
-template <typename Sink> void replay(const sim::Simulator& sim, Sink& pipeline,
-                                     const std::function<void(int, LidarScan&)>& edit,
-                                     const std::function<void(std::size_t, ImuSample&)>& edit_imu = {}) {
+/// Sink: an OnlinePipeline or a System (addImu, addScan). Leaves the sink unflushed, so that a
+/// second feed continues the same stream (a bag played again).
+template <typename Sink> void feed(const sim::Simulator& sim, Sink& pipeline,
+                                   const std::function<void(int, LidarScan&)>& edit,
+                                   const std::function<void(std::size_t, ImuSample&)>& edit_imu = {}) {
   const std::vector<ImuSample>& imu = sim.imu();
   int fed = 0;
   std::size_t i = 0;
@@ -62,6 +63,13 @@ template <typename Sink> void replay(const sim::Simulator& sim, Sink& pipeline,
       if (++l < nl) next_l = sim.livoxFrame(l);
     }
   }
+}
+
+/// feed(), then the end of the stream (flush).
+template <typename Sink> void replay(const sim::Simulator& sim, Sink& pipeline,
+                                     const std::function<void(int, LidarScan&)>& edit,
+                                     const std::function<void(std::size_t, ImuSample&)>& edit_imu = {}) {
+  feed(sim, pipeline, edit, edit_imu);
   pipeline.flush();
 }
 

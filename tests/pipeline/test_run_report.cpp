@@ -155,5 +155,19 @@ TEST(RunReport, InputStatusNamesEachCauseItHas) {
     EXPECT_EQ(status.find(absent), std::string::npos) << absent << ": " << status;
 }
 
+// An IMU that went silent for a while (its driver restarted) degrades the run without a sample
+// dropped; one sample lost now and then does not.
+TEST(RunReport, AnImuSilentForAWhileDegradesTheRunALoneLostSampleDoesNot) {
+  RunReport r;
+  r.input.imu_stream.period_s = 0.005;
+  r.input.imu_stream.missing = 3;
+  r.input.imu_stream.gaps = {{fromSec(1.0), 1}, {fromSec(7.0), 2}};
+  EXPECT_EQ(r.inputStatus(), "complete");
+  r.input.imu_stream.missing += 399;
+  r.input.imu_stream.gaps.push_back({fromSec(22.0), 399});
+  const std::string status = r.inputStatus();
+  EXPECT_NE(status.find("degraded: 399 IMU samples missing in gaps"), std::string::npos) << status;
+}
+
 }  // namespace
 }  // namespace mmlio::pipeline

@@ -3,7 +3,9 @@
 // bytes read as 1.8e109 m/s^2) would otherwise poison every pose after it, and one stamp far in the
 // future would make every later sample look out of order. Dropped and counted: non-finite values,
 // values beyond any MEMS IMU's range, stamps not after the last accepted sample (duplicates, out of
-// order), and stamps that jump far ahead of it (kept out until the stream comes back near it).
+// order), and stamps that jump far ahead of it (kept out until the stream comes back near it, or
+// stays there for a few samples) or far back (kept out: only the whole stream's time base going back
+// together, which OnlinePipeline checks, lets them in).
 // The first drop of each kind is logged; the report carries the counts.
 #include <cstddef>
 #include <limits>
@@ -40,12 +42,16 @@ class ImuGate {
   Stamp lastNs() const { return last_ns_; }
   /// The stream's time base moved back by delta (see OnlinePipeline): later stamps arrive shifted.
   void shiftBack(Stamp delta_ns) { last_ns_ -= delta_ns; }
+  /// The samples just dropped have stayed far before the last accepted one long enough to be
+  /// believed: the IMU's clock went back (a bag played again), not one corrupt stamp.
+  bool wentBack() const { return back_.confirmed(); }
 
  private:
   Config cfg_;
   Counts counts_;
   Stamp last_ns_ = std::numeric_limits<Stamp>::min();
   StampJumpGuard jump_{cfg_.max_jump_s, cfg_.jump_confirmations, cfg_.max_jump_s};
+  StampJumpGuard back_{cfg_.max_jump_s, cfg_.jump_confirmations, cfg_.max_jump_s};
 };
 
 }  // namespace mmlio::pipeline

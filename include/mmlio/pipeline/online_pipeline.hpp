@@ -35,7 +35,8 @@ class OnlinePipeline {
   const ImuGate& imuGate() const { return imu_gate_; }
   /// LiDAR scans dropped before the sweep aligner: not after the same LiDAR's previous scan, or a
   /// lone stamp more than 2 s after it (a corrupt stamp would otherwise hold every later sweep
-  /// back; a LiDAR that resumes after a real gap is accepted again after three scans).
+  /// back; a LiDAR that resumes after a real gap is accepted again after three scans), or more
+  /// than 2 s before it (let in only when the whole time base went back: TimeBaseJump).
   struct ScanDrops {
     std::size_t out_of_order = 0, jumped = 0;
     Stamp first_at_ns = 0, last_at_ns = 0;  // the LiDAR's last accepted scan at the first and last drop
@@ -55,7 +56,8 @@ class OnlinePipeline {
   static constexpr Stamp kMaxImuWaitNs = 2000000000LL;
 
   /// A jump of the whole stream's time base: the IMU and every LiDAR resumed together `jump_s`
-  /// after their last data (a clock re-sync, bags joined, a paused recording). The pipeline then
+  /// after their last data (a clock re-sync, bags joined, a paused recording) or before it (a bag
+  /// played again from its start, `rosbag play -l`, a clock set back). The pipeline then
   /// continues as if no time had passed (stamps shifted back) instead of extrapolating the motion
   /// over the gap; the estimator's stamps stay shifted, externalStamp() maps them back.
   struct TimeBaseJump {
@@ -81,6 +83,9 @@ class OnlinePipeline {
   std::map<std::string, Stamp> last_scan_ns_;
   std::map<std::string, StampJumpGuard> scan_jumps_;  // per LiDAR
   bool timeBaseJumped(Stamp imu_jump_ns) const;
+  /// Records a jump of the time base by gap_ns (either way) at the input's stamp at_ns; returns
+  /// the shift it adds to shift_ns_.
+  Stamp shiftTimeBase(Stamp at_ns, Stamp gap_ns);
   StampJumpGuard& scanJumpGuard(const std::string& sensor);
   Stamp shift_ns_ = 0;       // subtracted from every incoming stamp
   Stamp imu_period_ns_ = 0;  // latest spacing of accepted IMU samples

@@ -1,7 +1,8 @@
 #pragma once
-// One stream's guard against stamps that jump far ahead (IMU samples, one LiDAR's scans): a lone
-// corrupt stamp is dropped instead of making everything after it look out of order; a stream that
-// stays there (a real gap, a clock that jumped) is accepted again after a few stamps agree.
+// One stream's guard against stamps that jump far ahead or far back (IMU samples, one LiDAR's
+// scans): a lone corrupt stamp is dropped instead of making everything after it look out of order;
+// a stream that stays there (a real gap, a clock that jumped, a bag played again) is confirmed once a
+// few stamps agree.
 #include "mmlio/core/types.hpp"
 
 namespace mmlio::pipeline {
@@ -14,7 +15,9 @@ class StampJumpGuard {
       : max_jump_ns_(fromSec(max_jump_s)), run_spacing_ns_(fromSec(run_spacing_s)), confirmations_(confirmations) {}
 
   bool jumped(Stamp last_ns, Stamp stamp_ns) const { return stamp_ns - last_ns > max_jump_ns_; }
-  /// For a jumped stamp: true while it must be held back (dropped).
+  /// The same backwards: more than max_jump_s before the last accepted stamp.
+  bool jumpedBack(Stamp last_ns, Stamp stamp_ns) const { return last_ns - stamp_ns > max_jump_ns_; }
+  /// For a jumped stamp (either way): true while it must be held back (dropped).
   bool holdBack(Stamp last_ns, Stamp stamp_ns) {
     const bool continues = run_ > 0 && stamp_ns > run_last_ns_ && stamp_ns - run_last_ns_ < run_spacing_ns_;
     if (!continues) size_ns_ = stamp_ns - last_ns;
@@ -24,8 +27,11 @@ class StampJumpGuard {
   }
   /// A stamp was accepted: any run of jumped stamps is over.
   void accepted() { run_ = 0; }
-  /// A run of jumped stamps is being held back, its first `pendingJumpNs()` after the last accepted one.
+  /// A run of jumped stamps is being held back, its first `pendingJumpNs()` after the last accepted
+  /// one (negative: before it).
   bool pending() const { return run_ > 0; }
+  /// The run being held back is long enough to be believed.
+  bool confirmed() const { return run_ >= confirmations_; }
   Stamp pendingJumpNs() const { return size_ns_; }
   int confirmations() const { return confirmations_; }
 
