@@ -22,8 +22,9 @@ template <class T, std::size_t NumClasses> class BoundedQueue {
       : capacity_(capacity), evicts_oldest_(evicts_oldest) {}
 
   /// False when `item` was dropped: class `c` is full and keeps what waits, or the queue is
-  /// closed. An eviction of an older item returns true. Every drop counts for its class. Never
-  /// blocks on the consumer.
+  /// closed. An eviction of an older item returns true. Every drop for want of room counts for its
+  /// class; what arrives after close() (the node is stopping, the drivers are not) is refused
+  /// uncounted. Never blocks on the consumer.
   bool push(std::size_t c, T item) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -33,7 +34,8 @@ template <class T, std::size_t NumClasses> class BoundedQueue {
         --queued_[c];
         ++dropped_[c];
       }
-      if (closed_ || queued_[c] >= capacity_[c]) {
+      if (closed_) return false;
+      if (queued_[c] >= capacity_[c]) {
         ++dropped_[c];
         return false;
       }

@@ -208,6 +208,7 @@ odo = read_tum(f"{work}/again/trajectory_odometry.tum")
 run = read_tum(f"{work}/run/trajectory_odometry.tum")
 second = read_tum(f"{work}/again_second.tum")
 check(len(second) >= 0.95 * len(run), f"the second pass tracked ({len(second)} poses; mmlio run {len(run)})")
+check(report["sweeps"]["coverage"] > 0.95, f"poses cover the stream, both passes ({report['sweeps']['coverage']:.3f})")
 first = {r[0]: [float(x) for x in r[1:4]] for r in odo[: len(odo) - len(second)]}
 apart = max((math.dist(first[r[0]], [float(x) for x in r[1:4]]) for r in second if r[0] in first), default=1.0)
 check(apart < 0.05, f"both passes in one world: the second within {100 * apart:.2f} cm of the first")

@@ -65,6 +65,7 @@ TEST(BoundedQueue, CloseDrainsWhatIsQueuedThenStopsAndRefusesPushes) {
   q.push(0, 7);
   q.close();
   EXPECT_FALSE(q.push(0, 8));
+  EXPECT_EQ(q.dropped(0), 0u);  // arrived after the stop: not lost by the node
   int v = 0;
   ASSERT_TRUE(q.pop(&v));
   EXPECT_EQ(v, 7);

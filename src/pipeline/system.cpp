@@ -233,7 +233,7 @@ RunReport System::report(Stamp stream_end_ns, const TrustLimits& limits) const {
   r.memory.mapping_queue_max = mapping_.queueHighWater();
   r.memory.mapping_queue_capacity = mapping_.capacity();
   r.memory.peak_rss_mb = peakRssMb();
-  judgeTrust(&r, stream_end_ns > 0 ? stream_end_ns : odometry().lastImuNs(), limits);
+  judgeTrust(&r, online_.internalStamp(end_ns), limits);
   if (localizer_) reportLocalization(&r);
   return r;
 }
@@ -267,10 +267,12 @@ void System::reportLocalization(RunReport* r) const {
 
 // Trust: the stream after initialisation is covered by poses, few of them were degraded, and the
 // IMU never carried the position alone long enough to drift far.
+// Judged in the estimator's time, in which a stream whose time base jumped (a bag played again) runs
+// on without a jump.
 void System::judgeTrust(RunReport* r, Stamp stream_end_ns, const TrustLimits& limits) const {
   const PoseLog& poses = odometry_poses_;
   if (poses.empty()) return;
-  const Stamp first_ns = externalStamp(poses.front().stamp_ns), last_ns = externalStamp(poses.back().stamp_ns);
+  const Stamp first_ns = poses.front().stamp_ns, last_ns = poses.back().stamp_ns;
   const double span_s = toSec(stream_end_ns - first_ns);
   // The last sweep may end just past the stream's end (a --duration cut): never more than all of it covered.
   r->sweeps.coverage = span_s > 0 ? std::min(1.0, toSec(last_ns - first_ns) / span_s) : 1.0;

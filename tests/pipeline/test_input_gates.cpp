@@ -319,20 +319,20 @@ TEST(InputGates, ABagPlayedAgainFromItsStartGoesOnFromWhereTheRigIs) {
   // at both ends): the second pass's stamps repeat the first's, 16 s back, IMU and LiDARs alike.
   const sim::Simulator sim = office(16.0);
   const Trajectory clean = runOffice(sim, {}, {});
-  Trajectory looped;
-  std::size_t degraded = 0;
-  pipeline::OnlinePipeline* pipeline = nullptr;
-  pipeline::OnlinePipeline online(testing::simRigConfig(sim), "hvi", [&](const estimator::SweepResult& r) {
-    if (r.status == estimator::SweepResult::Status::kInitializing) return;
-    looped.push_back({pipeline->externalStamp(r.state.stamp_ns), r.state.pose()});
-    degraded += r.status == estimator::SweepResult::Status::kDegraded;
-  });
-  pipeline = &online;
-  testing::feed(sim, online, {});
-  testing::feed(sim, online, {});
-  online.flush();
-  ASSERT_EQ(online.timeBaseJumps().size(), 1u);
-  EXPECT_NEAR(toSec(online.timeBaseJumps()[0].shift_ns), -16.0, 0.3);
+  config::RigConfig cfg = testing::simRigConfig(sim);
+  cfg.mapping.loop_enabled = false;
+  pipeline::System system(cfg, "hvi");
+  testing::feed(sim, system, {});
+  testing::feed(sim, system, {});
+  system.flush();
+  system.finish();
+  const pipeline::RunReport report = system.report();
+  ASSERT_EQ(report.input.time_base_jumps.size(), 1u);
+  EXPECT_NEAR(report.input.time_base_jumps[0].shift_s, -16.0, 0.3);
+  EXPECT_GT(report.sweeps.coverage, 0.95);  // judged in the estimator's time, which did not go back
+  EXPECT_NE(report.inputStatus().find("time base"), std::string::npos) << report.inputStatus();
+  const std::size_t degraded = report.sweeps.degraded;
+  const Trajectory looped = system.odometryTrajectory();
 
   // Outputs keep the input's stamps: the second pass starts where the stamps go back.
   const auto back = std::adjacent_find(

@@ -67,6 +67,8 @@ class OnlinePipeline {
   const std::vector<TimeBaseJump>& timeBaseJumps() const { return time_jumps_; }
   /// An estimator stamp in the stream's own time (the bag's stamps).
   Stamp externalStamp(Stamp internal_ns) const;
+  /// The reverse, for a stream stamp after the latest jump (the stream's end).
+  Stamp internalStamp(Stamp external_ns) const { return external_ns - shift_ns_; }
 
  private:
   void drain(bool all);
