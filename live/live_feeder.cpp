@@ -262,6 +262,12 @@ void LiveFeeder::publishDiagnostics(Stamp now_ns, Stamp stamp_ns) {
   f.sweeps_degraded = degraded_;
   f.dropped_imu = droppedImu();
   f.dropped_scans = droppedScans();
+  const std::size_t trouble = f.dropped_imu + f.dropped_scans + f.sweeps_degraded;
+  if (trouble != trouble_so_far_) {
+    trouble_so_far_ = trouble;
+    last_trouble_ns_ = now_ns;
+  }
+  f.quiet_s = toSec(now_ns - last_trouble_ns_);
   std::vector<diagnostic_msgs::DiagnosticStatus> statuses{inputStatus(f, "mmlio: input")};
   if (const backend::LocalizationStatus* s = system_.localization())
     statuses.push_back(localizationStatus(*s, now_ns, "mmlio: localization"));

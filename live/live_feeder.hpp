@@ -155,6 +155,8 @@ class LiveFeeder {
   std::vector<Stamp> last_stamp_ns_;
   pipeline::System system_;
   std::size_t degraded_ = 0;
+  std::size_t trouble_so_far_ = 0;  // drops and degraded sweeps at the last diagnostics
+  Stamp last_trouble_ns_ = 0;       // when that count last grew (estimator time)
   Eigen::Quaterniond last_q_ = Eigen::Quaterniond::Identity();
   Stamp last_stamp_ns_pose_ = 0, last_map_ns_ = 0, last_save_ns_ = 0;
   bool save_due_ = false;  // an autosave, done between two messages (not inside the System's callback)

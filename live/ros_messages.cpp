@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cstring>
+#include <sstream>
 
 namespace mmlio::live {
 
@@ -180,18 +181,27 @@ diagnostic_msgs::DiagnosticStatus localizationStatus(const backend::Localization
 diagnostic_msgs::DiagnosticStatus inputStatus(const InputFigures& f, const std::string& name) {
   diagnostic_msgs::DiagnosticStatus d;
   d.name = name;
-  if (f.dropped_imu > 0) {
+  const bool recent = f.quiet_s < kRecentTroubleS;
+  if (f.dropped_imu > 0 && recent) {
     d.level = diagnostic_msgs::DiagnosticStatus::ERROR;
     d.message = std::to_string(f.dropped_imu) + " IMU messages dropped: the node falls behind its sensors";
-  } else if (f.dropped_scans > 0) {
+  } else if (f.dropped_scans > 0 && recent) {
     d.level = diagnostic_msgs::DiagnosticStatus::WARN;
     d.message = std::to_string(f.dropped_scans) + " LiDAR messages dropped: the node falls behind its sensors";
-  } else if (f.sweeps_degraded > 0) {
+  } else if (f.sweeps_degraded > 0 && recent) {
     d.level = diagnostic_msgs::DiagnosticStatus::WARN;
     d.message = std::to_string(f.sweeps_degraded) + " of " + std::to_string(f.sweeps) + " sweeps degraded";
   } else {
     d.level = diagnostic_msgs::DiagnosticStatus::OK;
-    d.message = "keeping up, nothing dropped";
+    d.message = "keeping up";
+    if (f.dropped_imu + f.dropped_scans + f.sweeps_degraded == 0) {
+      d.message += ", nothing dropped";
+    } else {
+      std::ostringstream earlier;
+      earlier << " (earlier: " << f.dropped_imu << " IMU and " << f.dropped_scans << " LiDAR messages dropped, "
+              << f.sweeps_degraded << " sweeps degraded; the last " << static_cast<long>(f.quiet_s) << " s ago)";
+      d.message += earlier.str();
+    }
   }
   addValue(&d, "imu_messages", std::to_string(f.imu_messages));
   addValue(&d, "sweeps", std::to_string(f.sweeps));

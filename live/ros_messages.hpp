@@ -61,9 +61,12 @@ diagnostic_msgs::DiagnosticStatus localizationStatus(const backend::Localization
 struct InputFigures {
   std::size_t imu_messages = 0, sweeps = 0, sweeps_degraded = 0;
   std::size_t dropped_imu = 0, dropped_scans = 0;  // by the full hand-off queue: the node falls behind
+  double quiet_s = 0.0;                            // sensor time since the last drop or degraded sweep
 };
-/// The input's state for /diagnostics: OK while nothing is lost, WARN when LiDAR messages were
-/// dropped (the node is slower than the sensors) or sweeps degraded, ERROR when IMU messages were.
+/// The input's state for /diagnostics, now: WARN when LiDAR messages were dropped (the node is
+/// slower than the sensors) or sweeps degraded within the last kRecentTroubleS, ERROR when IMU
+/// messages were; OK otherwise, with what was given up earlier in its message.
+constexpr double kRecentTroubleS = 10.0;
 diagnostic_msgs::DiagnosticStatus inputStatus(const InputFigures& f, const std::string& name);
 
 diagnostic_msgs::DiagnosticArray toDiagnostics(std::vector<diagnostic_msgs::DiagnosticStatus> statuses, Stamp stamp_ns);

@@ -4,8 +4,8 @@
 # node publishes. Checks the topics' types and rates, the tf tree map -> odom -> imu, the ~save_map
 # service, that the node's odometry equals `mmlio run`'s on the same bag and that its loop-corrected
 # trajectory scores within 5 % of it, with the loops listed in its report. Then a node localizing in
-# the session `mmlio run` wrote, and one killed by SIGKILL and restarted on its autosave; then the
-# bag played again from its start into a running node (its clock goes back 30 s).
+# the session `mmlio run` wrote, and one killed by SIGKILL and restarted on its autosave; then a node
+# started mid-motion that is fed the bag again from its start (its clock goes back).
 # Usage: live_node_test.sh MMLIO MMLIO_NODE CONFIG_DIR
 set -euo pipefail
 MMLIO="$1" NODE="$2" CONFIG_DIR="$3"
@@ -135,7 +135,7 @@ check_in_session_frame(work, "loc", "in the session's map frame, the hint notwit
 diagnostics = open(f"{work}/diagnostics.txt").read()
 check('name: "mmlio: localization"' in diagnostics and "level: 0" in diagnostics,
       "/diagnostics carried the localization, OK once localized")
-check('name: "mmlio: input"' in diagnostics and "keeping up, nothing dropped" in diagnostics,
+check('name: "mmlio: input"' in diagnostics and 'message: "keeping up' in diagnostics,
       "/diagnostics carried the input's state: keeping up")
 finish()
 PY
@@ -174,16 +174,17 @@ check_in_session_frame(work, "resumed", "past the crash point too")
 finish()
 PY
 
-# `rosbag play` restarted: the same bag again into a running node, its stamps 30 s back. The route
-# ends where it starts, so the node goes on from where the rig is, in the same world, and says so.
+# A node started after the drivers, then `rosbag play` restarted: the bag from 5 s in (walking: the
+# IMU is initialised without a standstill), then all of it again into the same node, its stamps 25 s
+# back. The route ends where it starts, so the node goes on from where the rig is, in the same world,
+# and says so.
 stdbuf -oL -eL "$NODE" __name:=mmlio_again _config:="$CONFIG_DIR/hvi.yaml" _calib:="$truth" \
   _out_dir:="$work/again" > "$work/again_node.log" 2>&1 &
 again_pid=$!
 pids+=($again_pid)
 wait_for 30 rostopic info /mmlio_again/odometry || fail "the node for the replayed bag never advertised its odometry"
-for pass in 1 2; do
-  rosbag play -q -r 2 --wait-for-subscribers "$bag" > "$work/play_again_$pass.log" 2>&1 || fail "rosbag play (pass $pass)"
-done
+rosbag play -q -r 2 -s 5 --wait-for-subscribers "$bag" > "$work/play_again_1.log" 2>&1 || fail "rosbag play -s 5"
+rosbag play -q -r 2 "$bag" > "$work/play_again_2.log" 2>&1 || fail "rosbag play (again)"
 sleep 3
 stop_node "$again_pid"
 python3 - "$work" << 'PY' > "$work/again_second.tum" || fail "the replayed bag's trajectory"
@@ -202,6 +203,7 @@ from live_checks import check, finish, read_tum
 work, again_ate, run_ate = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])  # odometry, both
 report = json.load(open(f"{work}/again/report.json"))
 jumps = report["input"]["time_base_jumps"]
+check(report["imu_init"]["forced"] is True, f"started in motion: IMU initialised without a standstill ({report['imu_init']['message'][:80]})")
 check(len(jumps) == 1 and -31.0 < jumps[0]["shift_s"] < -29.0, f"one jump of the time base, 30 s back ({jumps})")
 check(report["status"].startswith("degraded") and "time base" in report["status"], f"the report says so ({report['status'][:90]})")
 odo = read_tum(f"{work}/again/trajectory_odometry.tum")
@@ -210,8 +212,14 @@ second = read_tum(f"{work}/again_second.tum")
 check(len(second) >= 0.95 * len(run), f"the second pass tracked ({len(second)} poses; mmlio run {len(run)})")
 check(report["sweeps"]["coverage"] > 0.95, f"poses cover the stream, both passes ({report['sweeps']['coverage']:.3f})")
 first = {r[0]: [float(x) for x in r[1:4]] for r in odo[: len(odo) - len(second)]}
-apart = max((math.dist(first[r[0]], [float(x) for x in r[1:4]]) for r in second if r[0] in first), default=1.0)
-check(apart < 0.05, f"both passes in one world: the second within {100 * apart:.2f} cm of the first")
+t0 = float(read_tum(f"{work}/sim/office_gt.tum")[0][0])  # the bag's start
+def apart(lo, hi):
+    return max((math.dist(first[r[0]], [float(x) for x in r[1:4]]) for r in second
+                if r[0] in first and lo <= float(r[0]) - t0 < hi), default=1.0)
+# The first pass's first seconds carry the forced initialisation's error (a few cm), then it settles.
+check(apart(0, 10) < 0.10 and apart(10, 31) < 0.03,
+      f"both passes in one world: the second within {100 * apart(0, 10):.2f} cm of the first until 10 s, "
+      f"{100 * apart(10, 31):.2f} cm after")
 check(again_ate <= 1.5 * run_ate + 1e-4, f"second pass ATE {100 * again_ate:.2f} cm (mmlio run {100 * run_ate:.2f} cm)")
 finish()
 PY

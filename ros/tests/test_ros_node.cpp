@@ -229,7 +229,7 @@ TEST(RosMessages, DiagnosticsSayOkWhenLocalizedWarnBeforeAndErrorWhenLost) {
   EXPECT_EQ(lost.header.stamp.toNSec(), 10'000'000'000u);
 }
 
-TEST(RosMessages, TheInputStatusSaysWhatTheNodeGaveUp) {
+TEST(RosMessages, TheInputStatusSaysWhatTheNodeGivesUpNowAndWhatItGaveUpEarlier) {
   InputFigures f;
   f.imu_messages = 2000;
   f.sweeps = 100;
@@ -242,6 +242,12 @@ TEST(RosMessages, TheInputStatusSaysWhatTheNodeGaveUp) {
   EXPECT_NE(behind.message.find("7 LiDAR messages dropped"), std::string::npos) << behind.message;
   f.dropped_imu = 1;
   EXPECT_EQ(inputStatus(f, "mmlio: input").level, diagnostic_msgs::DiagnosticStatus::ERROR);
+  // Caught up: OK again, with what was given up.
+  f.quiet_s = 42.0;
+  const diagnostic_msgs::DiagnosticStatus caught_up = inputStatus(f, "mmlio: input");
+  EXPECT_EQ(caught_up.level, diagnostic_msgs::DiagnosticStatus::OK);
+  EXPECT_EQ(caught_up.message,
+            "keeping up (earlier: 1 IMU and 7 LiDAR messages dropped, 3 sweeps degraded; the last 42 s ago)");
 }
 
 }  // namespace
