@@ -85,6 +85,7 @@ for node in ("ros1", "ros2"):
     def per_minute(rs):
         return (rs[-1]["cpu_s"] - rs[0]["cpu_s"]) / max(1e-9, rs[-1]["minute"] - rs[0]["minute"])
     rss = (max(r["rss_mb"] for r in first), max(r["rss_mb"] for r in last))
+    settled = [r for r in rows if window <= r["minute"] <= 2 * window]  # after the first window's warm-up
     cpu = (per_minute(first), per_minute(last))
     report = json.load(open(f"{out}/{node}/report.json"))
     inp = report["input"]
@@ -94,5 +95,8 @@ for node in ("ros1", "ros2"):
           f"CPU {cpu[0]:.1f} / {cpu[1]:.1f} s per minute; {report['sweeps']['processed']} sweeps, "
           f"{len(inp['time_base_jumps'])} restarts of the bag, queue drops {inp['queue_dropped']}: "
           f"{'flat' if ok else 'GREW'}")
+    if settled:
+        print(f"  after warm-up: peak {max(r['rss_mb'] for r in settled):.0f} MB in minutes {window:.0f}-{2 * window:.0f}; "
+              f"CPU {per_minute(settled):.1f} s per minute")
 sys.exit(1 if grew else 0)
 PY
