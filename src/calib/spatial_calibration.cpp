@@ -12,13 +12,6 @@ namespace {
 constexpr double kDeg = M_PI / 180.0;
 constexpr std::size_t kFinalists = 3;  // yaw-search results measured again on their own view
 
-/// Weakest over strongest translation eigenvalue of a GICP Hessian: near 0 where a single wall (or
-/// two parallel ones) leaves a translation along it free.
-double translationConditioning(const Eigen::Matrix<double, 6, 6>& hessian) {
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(hessian.topLeftCorner<3, 3>());
-  return es.eigenvalues()(0) / std::max(es.eigenvalues()(2), 1e-12);
-}
-
 std::vector<Eigen::Vector3d> inRange(const std::vector<Eigen::Vector3d>& pts, double min_m, double max_m) {
   std::vector<Eigen::Vector3d> out;
   out.reserve(pts.size());
@@ -83,13 +76,13 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
     a.gicp = gicp(source, solid, init, cfg.gicp);
     return a;
   };
-  // More matched points per metre of fitness. A wrong alignment can match nearly every one of the
-  // few points its start put in view, so the count, not the fraction.
-  const auto score = [](const Attempt& x) {
-    return x.gicp.overlap * x.source_points / std::max(x.gicp.fitness_m, 1e-4);
-  };
-  const auto better = [&score](const Attempt& a, const Attempt& b) {  // converged first
+  // Converged first, then more matched points per metre of fitness. A wrong alignment can match
+  // nearly every one of the few points its start put in view, so the count, not the fraction.
+  const auto better = [](const Attempt& a, const Attempt& b) {
     if (a.gicp.converged != b.gicp.converged) return a.gicp.converged;
+    const auto score = [](const Attempt& x) {
+      return x.gicp.overlap * x.source_points / std::max(x.gicp.fitness_m, 1e-4);
+    };
     return score(a) > score(b);
   };
 
@@ -114,27 +107,15 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
       if (a.source_points > 0) tried.push_back(std::move(a));
     }
     // Each attempt was judged on the points its own start put in view; the best few are measured
-    // again on the points their result puts in view, where a wrong alignment shows. The measurement
-    // decides; its result replaces the attempt's only if it converged too.
+    // again on the points their result puts in view, where a wrong alignment shows.
     std::stable_sort(tried.begin(), tried.end(), better);
     if (!tried.empty()) best = tried.front();
-    // Among them, one that passes the checks below wins over one that does not (a wrong yaw can
-    // lay many points on one big plane, where the alignment is free to slide).
-    const auto passes = [&cfg](const Attempt& x) {
-      return x.gicp.fitness_m <= cfg.max_fitness_m && x.gicp.overlap >= cfg.min_overlap &&
-             translationConditioning(x.gicp.hessian) >= cfg.min_translation_conditioning;
-    };
-    double best_measured = -1.0;
-    bool best_passes = false;
+    bool refined_any = false;
     for (std::size_t k = 0; k < std::min<std::size_t>(kFinalists, tried.size()); ++k) {
       if (!tried[k].gicp.converged) continue;
-      const Attempt measured = attempt(tried[k].gicp.T_target_source);
-      const Attempt& result = measured.gicp.converged ? measured : tried[k];
-      const bool ok = passes(measured) && passes(result);
-      if (best_measured >= 0 && (best_passes > ok || (best_passes == ok && score(measured) <= best_measured))) continue;
-      best_measured = score(measured);
-      best_passes = ok;
-      best = result;
+      const Attempt refined = attempt(tried[k].gicp.T_target_source);
+      if (refined.gicp.converged && (!refined_any || better(refined, best))) best = refined;
+      refined_any = refined_any || refined.gicp.converged;
     }
   }
 
@@ -163,7 +144,8 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
   }
   // A single wall (or two parallel ones) in the overlap leaves translations along it free: the
   // alignment then only looks good. Compare the weakest translation direction with the strongest.
-  const double conditioning = translationConditioning(g.hessian);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(g.hessian.topLeftCorner<3, 3>());
+  const double conditioning = es.eigenvalues()(0) / std::max(es.eigenvalues()(2), 1e-12);
   if (conditioning < cfg.min_translation_conditioning) {
     res.message = "the overlapping region constrains the extrinsic poorly (translation conditioning " +
                   fmt(conditioning) + " < " + fmt(cfg.min_translation_conditioning) +
