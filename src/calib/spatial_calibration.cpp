@@ -1,16 +1,13 @@
 #include "mmlio/calib/spatial_calibration.hpp"
 
 #include <Eigen/Eigenvalues>
-#include <algorithm>
 #include <cmath>
 #include <sstream>
-#include <vector>
 
 namespace mmlio::calib {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
-constexpr std::size_t kFinalists = 3;  // yaw-search results measured again on their own view
 
 std::vector<Eigen::Vector3d> inRange(const std::vector<Eigen::Vector3d>& pts, double min_m, double max_m) {
   std::vector<Eigen::Vector3d> out;
@@ -76,14 +73,11 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
     a.gicp = gicp(source, solid, init, cfg.gicp);
     return a;
   };
-  // Converged first, then more matched points per metre of fitness. A wrong alignment can match
-  // nearly every one of the few points its start put in view, so the count, not the fraction.
-  const auto better = [](const Attempt& a, const Attempt& b) {
+  const auto better = [](const Attempt& a, const Attempt& b) {  // more matched points, then tighter
     if (a.gicp.converged != b.gicp.converged) return a.gicp.converged;
-    const auto score = [](const Attempt& x) {
-      return x.gicp.overlap * x.source_points / std::max(x.gicp.fitness_m, 1e-4);
-    };
-    return score(a) > score(b);
+    const double sa = a.gicp.overlap / std::max(a.gicp.fitness_m, 1e-4),
+                 sb = b.gicp.overlap / std::max(b.gicp.fitness_m, 1e-4);
+    return sa > sb;
   };
 
   Attempt best;
@@ -94,8 +88,6 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
       guess && best.gicp.converged && best.gicp.fitness_m <= cfg.max_fitness_m && best.gicp.overlap >= cfg.min_overlap;
   if (!guess_good) {
     res.yaw_searched = true;
-    std::vector<Attempt> tried;
-    if (best.source_points > 0) tried.push_back(best);
     const Eigen::Vector3d t0 = guess ? Eigen::Vector3d(guess->translation()) : Eigen::Vector3d::Zero();
     const Eigen::Matrix3d R0 = guess ? Eigen::Matrix3d(guess->linear()) : Eigen::Matrix3d::Identity();
     const int steps = std::max(1, static_cast<int>(std::round(360.0 / cfg.yaw_step_deg)));
@@ -103,19 +95,13 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
       Eigen::Isometry3d init = Eigen::Isometry3d::Identity();
       init.linear() = Eigen::AngleAxisd(i * 2 * M_PI / steps, Eigen::Vector3d::UnitZ()).toRotationMatrix() * R0;
       init.translation() = t0;
-      Attempt a = attempt(init);
-      if (a.source_points > 0) tried.push_back(std::move(a));
+      const Attempt a = attempt(init);
+      if (a.source_points > 0 && (best.source_points == 0 || better(a, best))) best = a;
     }
-    // Each attempt was judged on the points its own start put in view; the best few are measured
-    // again on the points their result puts in view, where a wrong alignment shows.
-    std::stable_sort(tried.begin(), tried.end(), better);
-    if (!tried.empty()) best = tried.front();
-    bool refined_any = false;
-    for (std::size_t k = 0; k < std::min<std::size_t>(kFinalists, tried.size()); ++k) {
-      if (!tried[k].gicp.converged) continue;
-      const Attempt refined = attempt(tried[k].gicp.T_target_source);
-      if (refined.gicp.converged && (!refined_any || better(refined, best))) best = refined;
-      refined_any = refined_any || refined.gicp.converged;
+    // Refine the winner once more on the points its own estimate puts in view.
+    if (best.gicp.converged) {
+      const Attempt refined = attempt(best.gicp.T_target_source);
+      if (refined.gicp.converged) best = refined;
     }
   }
 
