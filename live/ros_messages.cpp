@@ -3,7 +3,6 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cstring>
-#include <sstream>
 
 namespace mmlio::live {
 
@@ -197,10 +196,9 @@ diagnostic_msgs::DiagnosticStatus inputStatus(const InputFigures& f, const std::
     if (f.dropped_imu + f.dropped_scans + f.sweeps_degraded == 0) {
       d.message += ", nothing dropped";
     } else {
-      std::ostringstream earlier;
-      earlier << " (earlier: " << f.dropped_imu << " IMU and " << f.dropped_scans << " LiDAR messages dropped, "
-              << f.sweeps_degraded << " sweeps degraded; the last " << static_cast<long>(f.quiet_s) << " s ago)";
-      d.message += earlier.str();
+      d.message += " (earlier: " + std::to_string(f.dropped_imu) + " IMU and " + std::to_string(f.dropped_scans) +
+                   " LiDAR messages dropped, " + std::to_string(f.sweeps_degraded) + " sweeps degraded; the last " +
+                   std::to_string(static_cast<long>(f.quiet_s)) + " s ago)";
     }
   }
   addValue(&d, "imu_messages", std::to_string(f.imu_messages));

@@ -92,13 +92,14 @@ std::string RunReport::inputStatus() const {
   };
   const std::string losses = lidarStreamLosses(input);
   if (!losses.empty()) causes.push_back(losses + " (input.lidar_streams)");
+  const std::size_t imu_gaps = imuGapSamples(input);
   if (input.imu_dropped.total() > 0) {
     std::string imu = std::to_string(input.imu_dropped.total()) + " IMU samples dropped (input.imu_dropped)";
     if (input.imu_stream.missing > 0)
       imu += ", " + std::to_string(input.imu_stream.missing) + " missing (input.imu_stream.gaps)";
     causes.push_back(imu);
-  } else if (imuGapSamples(input) > 0) {
-    causes.push_back(std::to_string(imuGapSamples(input)) +
+  } else if (imu_gaps > 0) {
+    causes.push_back(std::to_string(imu_gaps) +
                      " IMU samples missing in gaps of 0.05 s or more (input.imu_stream.gaps)");
   }
   count(input.scans_out_of_order + input.scans_stamp_jumps,
