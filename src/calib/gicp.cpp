@@ -151,6 +151,9 @@ GicpResult gicp(const std::vector<Eigen::Vector3d>& source, const std::vector<Ei
         last_level_converged = true;
         break;
       }
+      // Correspondences flickering at the gate keep a settled solution moving by a hair: still settled.
+      last_level_converged = delta.head<3>().norm() < cfg.settled_factor * cfg.converged_translation_m &&
+                             delta.tail<3>().norm() < cfg.settled_factor * cfg.converged_rotation_rad;
     }
   }
   linearise(cfg.max_corr_dist_fine_m, &H, &g, &n, &dist_sum);

@@ -1,7 +1,9 @@
 #include "mmlio/calib/spatial_calibration.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace mmlio::calib {
@@ -36,6 +38,76 @@ std::vector<Eigen::Vector3d> cropToSolidView(const std::vector<Eigen::Vector3d>&
   return out;
 }
 
+/// The nearest return of the solid-state LiDAR per direction (azimuth, elevation bins of its frame):
+/// what it saw through. A spinning point well in front of that return lies in space the solid-state
+/// LiDAR saw as empty, which a right extrinsic cannot produce (but for the sensors' small parallax).
+class SeenThrough {
+ public:
+  SeenThrough(const std::vector<Eigen::Vector3d>& solid, const SpatialCalibrationConfig& cfg)
+      : half_h_((0.5 * cfg.solid_fov_horizontal_deg + cfg.fov_margin_deg) * kDeg),
+        half_v_((0.5 * cfg.solid_fov_vertical_deg + cfg.fov_margin_deg) * kDeg),
+        bin_(cfg.seen_through_bin_deg * kDeg),
+        cols_(static_cast<int>(std::ceil(2 * half_h_ / bin_))),
+        rows_(static_cast<int>(std::ceil(2 * half_v_ / bin_))),
+        nearest_(static_cast<std::size_t>(cols_) * static_cast<std::size_t>(rows_),
+                 std::numeric_limits<float>::infinity()),
+        margin_m_(cfg.seen_through_margin_m),
+        margin_frac_(cfg.seen_through_margin_fraction) {
+    std::vector<float> own(nearest_);
+    for (const auto& q : solid) {
+      const int i = index(q);
+      if (i >= 0) own[i] = std::min(own[i], static_cast<float>(q.norm()));
+    }
+    // The nearest over each bin and its neighbours: at an occluding edge the pattern may have
+    // sampled only the background in the edge's own bin.
+    for (int r = 0; r < rows_; ++r)
+      for (int c = 0; c < cols_; ++c)
+        for (int dr = std::max(0, r - 1); dr <= std::min(rows_ - 1, r + 1); ++dr)
+          for (int dc = std::max(0, c - 1); dc <= std::min(cols_ - 1, c + 1); ++dc)
+            nearest_[r * cols_ + c] = std::min(nearest_[r * cols_ + c], own[dr * cols_ + dc]);
+  }
+
+  /// Fraction of `spinning` (spinning frame) that T_solid_spinning puts in front of the solid-state
+  /// LiDAR's nearest return in its direction, among the points whose direction it saw a return in.
+  double fraction(const std::vector<Eigen::Vector3d>& spinning, const Eigen::Isometry3d& T_solid_spinning) const {
+    int seen = 0, through = 0;
+    for (const auto& p : spinning) {
+      const Eigen::Vector3d q = T_solid_spinning * p;
+      const int i = index(q);
+      if (i < 0 || !std::isfinite(nearest_[i])) continue;
+      ++seen;
+      const double r = q.norm();
+      if (nearest_[i] > r + margin_m_ + margin_frac_ * r) ++through;
+    }
+    return seen > 0 ? static_cast<double>(through) / seen : 0.0;
+  }
+
+ private:
+  int index(const Eigen::Vector3d& q) const {
+    if (q.x() <= 0) return -1;
+    const double az = std::atan2(q.y(), q.x()), el = std::atan2(q.z(), q.head<2>().norm());
+    const int c = static_cast<int>((az + half_h_) / bin_), r = static_cast<int>((el + half_v_) / bin_);
+    if (az < -half_h_ || el < -half_v_ || c >= cols_ || r >= rows_) return -1;
+    return r * cols_ + c;
+  }
+
+  double half_h_, half_v_, bin_;
+  int cols_, rows_;
+  std::vector<float> nearest_;
+  double margin_m_, margin_frac_;
+};
+
+bool sameMount(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, const SpatialCalibrationConfig& cfg) {
+  const Eigen::Isometry3d d = a.inverse() * b;
+  return d.translation().norm() <= cfg.distinct_translation_m &&
+         Eigen::AngleAxisd(d.rotation()).angle() <= cfg.distinct_rotation_deg * kDeg;
+}
+
+double yawDeg(const Eigen::Isometry3d& T) {
+  const Eigen::Vector3d x = T.linear().col(0);
+  return std::atan2(x.y(), x.x()) / kDeg;
+}
+
 std::string fmt(double v, int precision = 3) {
   std::ostringstream os;
   os.precision(precision);
@@ -61,9 +133,11 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
   }
 
   // One GICP run from an initial T_solid_spinning, on the spinning points that fall in the view.
+  const SeenThrough seen_through(solid, cfg);
   struct Attempt {
     GicpResult gicp;
     int source_points = 0;
+    double seen_through = 0;
   };
   const auto attempt = [&](const Eigen::Isometry3d& init) {
     Attempt a;
@@ -71,37 +145,68 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
     a.source_points = static_cast<int>(source.size());
     if (a.source_points < cfg.min_points) return a;
     a.gicp = gicp(source, solid, init, cfg.gicp);
+    a.seen_through = seen_through.fraction(spinning, a.gicp.T_target_source);
     return a;
   };
-  const auto better = [](const Attempt& a, const Attempt& b) {  // more matched points, then tighter
-    if (a.gicp.converged != b.gicp.converged) return a.gicp.converged;
-    const double sa = a.gicp.overlap / std::max(a.gicp.fitness_m, 1e-4),
-                 sb = b.gicp.overlap / std::max(b.gicp.fitness_m, 1e-4);
-    return sa > sb;
+  const auto agrees = [&](const Attempt& a) {
+    return a.gicp.converged && a.gicp.fitness_m <= cfg.max_fitness_m && a.gicp.overlap >= cfg.min_overlap &&
+           a.seen_through <= cfg.max_seen_through;
   };
 
   Attempt best;
-  if (guess) {
-    best = attempt(*guess);
-  }
-  const bool guess_good =
-      guess && best.gicp.converged && best.gicp.fitness_m <= cfg.max_fitness_m && best.gicp.overlap >= cfg.min_overlap;
-  if (!guess_good) {
+  if (guess) best = attempt(*guess);
+  if (!agrees(best)) {
     res.yaw_searched = true;
     const Eigen::Vector3d t0 = guess ? Eigen::Vector3d(guess->translation()) : Eigen::Vector3d::Zero();
     const Eigen::Matrix3d R0 = guess ? Eigen::Matrix3d(guess->linear()) : Eigen::Matrix3d::Identity();
     const int steps = std::max(1, static_cast<int>(std::round(360.0 / cfg.yaw_step_deg)));
+    std::vector<Attempt> tried;
     for (int i = 0; i < steps; ++i) {
       Eigen::Isometry3d init = Eigen::Isometry3d::Identity();
       init.linear() = Eigen::AngleAxisd(i * 2 * M_PI / steps, Eigen::Vector3d::UnitZ()).toRotationMatrix() * R0;
       init.translation() = t0;
-      const Attempt a = attempt(init);
-      if (a.source_points > 0 && (best.source_points == 0 || better(a, best))) best = a;
+      Attempt a = attempt(init);
+      if (a.gicp.converged) tried.push_back(std::move(a));
     }
-    // Refine the winner once more on the points its own estimate puts in view.
-    if (best.gicp.converged) {
-      const Attempt refined = attempt(best.gicp.T_target_source);
-      if (refined.gicp.converged) best = refined;
+    // A start's matched fraction counts only the points that start put in view: a wrong one with few
+    // points in view can match nearly all of them. The best few are measured again on the view
+    // their own result gives, and compared by how many points they explain.
+    std::stable_sort(tried.begin(), tried.end(), [](const Attempt& a, const Attempt& b) {
+      return a.gicp.overlap / std::max(a.gicp.fitness_m, 1e-4) > b.gicp.overlap / std::max(b.gicp.fitness_m, 1e-4);
+    });
+    std::vector<Attempt> finalists;
+    for (const Attempt& a : tried) {
+      if (static_cast<int>(finalists.size()) >= cfg.yaw_finalists) break;
+      Attempt m = attempt(a.gicp.T_target_source);
+      // Started where GICP settled once, it is a measurement: it stands on enough correspondences
+      // (flickering at the fine gate, or sliding along a wall, it may not pass the strict test).
+      m.gicp.converged = m.gicp.inliers >= cfg.gicp.min_correspondences;
+      if (!m.gicp.converged) continue;
+      const bool known = std::any_of(finalists.begin(), finalists.end(), [&](const Attempt& f) {
+        return sameMount(f.gicp.T_target_source, m.gicp.T_target_source, cfg);
+      });
+      if (!known) finalists.push_back(std::move(m));
+    }
+    const auto explained = [](const Attempt& a) { return a.gicp.inliers * (1.0 - a.seen_through); };
+    std::stable_sort(finalists.begin(), finalists.end(), [&](const Attempt& a, const Attempt& b) {
+      if (agrees(a) != agrees(b)) return agrees(a);
+      return explained(a) > explained(b);
+    });
+    for (const Attempt& f : finalists) {
+      res.candidates.push_back({f.gicp.T_target_source, yawDeg(f.gicp.T_target_source), f.gicp.fitness_m,
+                                f.gicp.overlap, f.gicp.inliers, f.source_points, f.seen_through, agrees(f)});
+    }
+    if (!finalists.empty()) best = finalists.front();
+    if (finalists.size() >= 2 && agrees(finalists[0]) && agrees(finalists[1]) &&
+        explained(finalists[1]) >= cfg.ambiguity_ratio * explained(finalists[0])) {
+      res.T_solid_spinning = finalists[0].gicp.T_target_source;
+      res.spinning_points = finalists[0].source_points;
+      res.message = "two mounts fit the start about equally (spinning LiDAR yaw " +
+                    fmt(yawDeg(finalists[0].gicp.T_target_source)) + " and " +
+                    fmt(yawDeg(finalists[1].gicp.T_target_source)) +
+                    " deg in the solid-state frame): give a rough T_imu_sensor for the spinning LiDAR "
+                    "(within 30 deg), or start the bag where the view is not symmetric";
+      return res;
     }
   }
 
@@ -111,6 +216,7 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
   res.overlap = g.overlap;
   res.spinning_points = best.source_points;
   res.hessian = g.hessian;
+  res.seen_through = best.seen_through;
   if (best.source_points < cfg.min_points) {
     res.message = "the spinning LiDAR sees fewer than " + std::to_string(cfg.min_points) +
                   " points inside the solid-state field of view: the two LiDARs do not overlap enough";
@@ -120,6 +226,14 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
     res.message = "GICP did not converge (" + std::to_string(g.inliers) +
                   " correspondences): give a rough "
                   "T_imu_sensor for the spinning LiDAR in the config, or start the bag facing a structured scene";
+    return res;
+  }
+  if (best.seen_through > cfg.max_seen_through) {
+    res.message = fmt(100 * best.seen_through, 2) +
+                  " % of the spinning points in view lie where the solid-state "
+                  "LiDAR sees through (at most " +
+                  fmt(100 * cfg.max_seen_through, 2) +
+                  " %): no mount explains both views; check that both LiDARs see the same scene at the start";
     return res;
   }
   if (g.fitness_m > cfg.max_fitness_m || g.overlap < cfg.min_overlap) {

@@ -155,6 +155,10 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
   const std::vector<Eigen::Vector3d> spinning_pts = positionsOf(c.spinning_rest);
   const Eigen::Isometry3d guess = solid->T_imu_sensor.inverse() * spinning->T_imu_sensor;
   res.spatial = calib::calibrateSpinningToSolid(spinning_pts, solid_pts, guess, opt.spatial);
+  for (const calib::MountCandidate& m : res.spatial.candidates)
+    log::emit(log::Level::kInfo, "yaw search: yaw ", fmt(m.yaw_deg, 4), " deg, ", m.inliers, " of ", m.points_in_view,
+              " spinning points in view matched (fitness ", fmt(m.fitness_m, 3), " m), ", fmt(100 * m.seen_through, 2),
+              " % seen through", m.agrees ? "" : ": disagrees");
   if (!res.spatial.ok) throw Error("spatial calibration refused: " + res.spatial.message);
   const Eigen::Isometry3d T_imu_spinning = solid->T_imu_sensor * res.spatial.T_solid_spinning;
   log::emit(log::Level::kInfo, "spatial calibration: ", res.spatial.message);
@@ -183,6 +187,7 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
   res.extra[spinning->name]["points_used"] = res.spatial.spinning_points;
   res.extra[spinning->name]["reference_points_used"] = res.spatial.solid_points;
   res.extra[spinning->name]["yaw_searched"] = res.spatial.yaw_searched;
+  res.extra[spinning->name]["seen_through"] = res.spatial.seen_through;
   res.extra[spinning->name]["time_offset_estimated"] = res.temporal.ok;
   if (res.temporal.ok) {
     res.extra[spinning->name]["time_offset_sigma_s"] = res.temporal.sigma_s;

@@ -74,6 +74,8 @@ TEST(SpatialCalibration, FindsTheMountByYawSearchWithoutAGuess) {
   for (const auto& p : s.spinning) turned.push_back(turn.inverse() * p);  // points in the turned sensor frame
   const SpatialCalibrationResult r = calibrateSpinningToSolid(turned, s.solid, std::nullopt);
   std::printf("%s\n", r.message.c_str());
+  for (const MountCandidate& c : r.candidates)
+    std::printf("  yaw %.1f: %d of %d, seen through %.3f\n", c.yaw_deg, c.inliers, c.points_in_view, c.seen_through);
   ASSERT_TRUE(r.ok) << r.message;
   EXPECT_TRUE(r.yaw_searched);
   expectClose(r.T_solid_spinning, trueSolidSpinning(sim) * turn);

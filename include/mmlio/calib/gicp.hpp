@@ -31,6 +31,7 @@ struct GicpConfig {
   int max_iterations_per_level = 30;
   double converged_translation_m = 1e-5;  // a level stops when the update is below both
   double converged_rotation_rad = 1e-6;
+  double settled_factor = 10;    // the last iteration's update within this many times both: converged too
   int min_correspondences = 50;  // fewer at any iteration: not converged
 };
 

@@ -6,7 +6,10 @@
 // extrinsic: T_imu_spinning = T_imu_solid * T_solid_spinning.
 //
 // Without a usable initial guess a yaw search runs GICP from every yaw_step_deg about the solid
-// LiDAR's vertical axis and keeps the best (mounts differ mostly by yaw on real rigs).
+// LiDAR's vertical axis (mounts differ mostly by yaw on real rigs), measures its best few again on
+// the view their own results give, and keeps the one that explains most spinning points without
+// putting any where the solid-state LiDAR sees through; two mounts that explain about as much are
+// refused (a symmetric view), not guessed between.
 #include <optional>
 #include <string>
 #include <vector>
@@ -26,6 +29,15 @@ struct SpatialCalibrationConfig {
   double yaw_step_deg = 15.0;                  // yaw search grid
   double max_fitness_m = 0.05;                 // accept: mean inlier distance at most this ...
   double min_overlap = 0.5;                    // ... and this fraction of cropped spinning points matched
+  double max_seen_through = 0.02;              // ... and at most this fraction of the spinning points in view
+                                               // in front of the solid-state LiDAR's return (see through)
+  double seen_through_bin_deg = 0.5;           // direction bins of the solid-state returns
+  double seen_through_margin_m = 0.2;          // a point is seen through when the return behind it is this
+  double seen_through_margin_fraction = 0.05;  // much (plus this fraction of its range) farther
+  int yaw_finalists = 4;                       // distinct best starts of the yaw search measured again
+  double distinct_translation_m = 0.1;         // finalists closer than this and ...
+  double distinct_rotation_deg = 5.0;          // ... this are the same mount
+  double ambiguity_ratio = 0.8;                // the runner-up explains this fraction of the winner's points: refuse
   int min_points = 500;                        // fewer points on either side: refuse
   double min_translation_conditioning = 0.05;  // weakest / strongest translation eigenvalue of the GICP
                                                // Hessian below this: degenerate overlap (a wall), refuse
@@ -38,6 +50,16 @@ struct SpatialCalibrationConfig {
   }();
 };
 
+/// One distinct finalist of the yaw search, best first.
+struct MountCandidate {
+  Eigen::Isometry3d T_solid_spinning = Eigen::Isometry3d::Identity();
+  double yaw_deg = 0;  // the spinning LiDAR's x axis in the solid-state frame
+  double fitness_m = 0, overlap = 0;
+  int inliers = 0, points_in_view = 0;
+  double seen_through = 0;
+  bool agrees = false;  // passes fitness, overlap and seen-through
+};
+
 struct SpatialCalibrationResult {
   bool ok = false;
   std::string message;  // what was found, or why it was refused
@@ -45,6 +67,8 @@ struct SpatialCalibrationResult {
   double fitness_m = 0, overlap = 0;
   int spinning_points = 0, solid_points = 0;  // used, after cropping and voxel filtering
   bool yaw_searched = false;
+  double seen_through = 0;                 // fraction of the spinning points in view the solid-state LiDAR sees through
+  std::vector<MountCandidate> candidates;  // the yaw search's finalists, best first
   Eigen::Matrix<double, 6, 6> hessian = Eigen::Matrix<double, 6, 6>::Zero();  // GICP, (dp, dtheta)
 };
 
