@@ -325,6 +325,11 @@ std::string startupHtml(const RunReport& r) {
       fixed(r.imu_init.gravity_norm_m_s2, 3) + " m/s^2, accelerometer scale " + fixed(r.input.imu_acc_scale, 5));
   row("gyroscope bias", fixed(r.imu_init.gyro_bias.x(), 4) + ", " + fixed(r.imu_init.gyro_bias.y(), 4) + ", " +
                             fixed(r.imu_init.gyro_bias.z(), 4) + " rad/s");
+  row("IMU biases estimated while running",
+      "accelerometer " + fixed(r.imu_bias.acc_end_m_s2.norm(), 3) + " m/s^2 at the end (at most " +
+          fixed(r.imu_bias.max_acc_m_s2, 3) + " at " + fixed(r.imu_bias.max_acc_at_s, 0) + " s), gyroscope " +
+          fixed(r.imu_bias.gyro_end_rad_s.norm(), 4) + " rad/s (at most " + fixed(r.imu_bias.max_gyro_rad_s, 4) +
+          " at " + fixed(r.imu_bias.max_gyro_at_s, 0) + " s)");
   row("extrinsics", r.run.calibration + " (config_used.yaml holds them as run)");
   row("mode", r.input.mode + ", config " + (r.input.config.empty() ? "built-in defaults" : r.input.config));
   html +=

@@ -184,6 +184,10 @@ Json toJson(const RunReport& r) {
                      {"gyro_bias_rad_s", vec3(r.imu_init.gyro_bias)},
                      {"acc_scale", r.input.imu_acc_scale},
                      {"message", r.imu_init.message}};
+  rep["imu_bias"] = {
+      {"acc_end_m_s2", vec3(r.imu_bias.acc_end_m_s2)}, {"gyro_end_rad_s", vec3(r.imu_bias.gyro_end_rad_s)},
+      {"max_acc_m_s2", r.imu_bias.max_acc_m_s2},       {"max_acc_at_s", r.imu_bias.max_acc_at_s},
+      {"max_gyro_rad_s", r.imu_bias.max_gyro_rad_s},   {"max_gyro_at_s", r.imu_bias.max_gyro_at_s}};
   rep["sweeps"] = {{"processed", r.sweeps.processed},
                    {"tracked", r.sweeps.tracked},
                    {"degraded", r.sweeps.degraded},

@@ -72,6 +72,7 @@ void System::onSweep(estimator::SweepResult r) {
     ++sweeps_.tracked;
   Stopwatch handoff;
   sampleCalibration(r.state.stamp_ns);
+  trackImuBias(r);
   odometry_poses_.push_back({r.state.stamp_ns, r.state.pose()});
   if (localizer_ && r.keyframe && r.status == estimator::SweepResult::Status::kTracking) {
     std::vector<Eigen::Vector3d> cloud;
@@ -121,6 +122,21 @@ void System::onSweep(estimator::SweepResult r) {
   if (timing_observer_) timing_observer_(stamp_ns, times);
   // r was moved to the back end only without an observer.
   if (observer_) observer_(r);  // NOLINT(bugprone-use-after-move)
+}
+
+void System::trackImuBias(const estimator::SweepResult& r) {
+  if (r.status != estimator::SweepResult::Status::kTracking) return;
+  const ImuBias& b = r.state.bias;
+  imu_bias_.acc_end_m_s2 = b.acc_m_s2;
+  imu_bias_.gyro_end_rad_s = b.gyro_rad_s;
+  if (b.acc_m_s2.norm() > imu_bias_.max_acc_m_s2) {
+    imu_bias_.max_acc_m_s2 = b.acc_m_s2.norm();
+    imu_bias_.max_acc_at_s = toSec(r.state.stamp_ns - first_imu_ns_);
+  }
+  if (b.gyro_rad_s.norm() > imu_bias_.max_gyro_rad_s) {
+    imu_bias_.max_gyro_rad_s = b.gyro_rad_s.norm();
+    imu_bias_.max_gyro_at_s = toSec(r.state.stamp_ns - first_imu_ns_);
+  }
 }
 
 void System::sampleCalibration(Stamp stamp_ns) {
@@ -209,6 +225,7 @@ RunReport System::report(Stamp stream_end_ns, const TrustLimits& limits) const {
   for (const OnlinePipeline::TimeBaseJump& j : online_.timeBaseJumps())
     r.input.time_base_jumps.push_back({toSec(j.at_ns), toSec(j.shift_ns)});
   r.imu_init = odometry().imuInit();
+  r.imu_bias = imu_bias_;
   r.sweeps = sweeps_;
   r.sweeps.processed = online_.sweepsProcessed();
   r.sweeps.keyframes = odometry().keyframes();

@@ -24,10 +24,10 @@ Scene fourFoldRoom() {
     return Eigen::Vector3d(Eigen::AngleAxisd(k * M_PI / 2, Eigen::Vector3d::UnitZ()) * p);
   };
   const std::vector<Box> quadrant = {
-      {{a, -a - w, 0}, {a + w, a + w, h}},           // wall
-      {{2.4, 1.6, 0}, {3.4, 2.6, h}},                // pillar left
-      {{2.4, -2.6, 0}, {3.4, -1.6, h}},              // pillar right
-      {{4.4, -0.3, 0}, {a, 0.9, 1.8}},               // cabinet against the wall, off centre
+      {{a, -a - w, 0}, {a + w, a + w, h}},  // wall
+      {{2.4, 1.6, 0}, {3.4, 2.6, h}},       // pillar left
+      {{2.4, -2.6, 0}, {3.4, -1.6, h}},     // pillar right
+      {{4.4, -0.3, 0}, {a, 0.9, 1.8}},      // cabinet against the wall, off centre
   };
   for (int k = 0; k < 4; ++k) {
     for (const Box& b : quadrant) {

@@ -188,6 +188,23 @@ TEST(LiveReport, JudgesCoverageDegradationAndTrustAsARunDoes) {
   EXPECT_NE(bad.untrusted.find("sweeps degraded"), std::string::npos) << bad.untrusted;
 }
 
+TEST(LiveReport, StatesTheAccelerometerBiasTheEstimatorFound) {
+  sim::SimOptions so;
+  so.scenario = "office";
+  so.duration_s = 16.0;
+  so.acc_bias_m_s2 = 0.1;  // per axis, signs from the seed
+  const sim::Simulator sim(so);
+  const RunReport r = systemReport(sim, {});
+  const double truth = 0.1 * std::sqrt(3.0);
+  std::printf("accelerometer bias: end %.3f, at most %.3f at %.1f s (truth %.3f); gyroscope %.4f rad/s\n",
+              r.imu_bias.acc_end_m_s2.norm(), r.imu_bias.max_acc_m_s2, r.imu_bias.max_acc_at_s, truth,
+              r.imu_bias.gyro_end_rad_s.norm());
+  EXPECT_NEAR(r.imu_bias.acc_end_m_s2.norm(), truth, 0.3 * truth);
+  EXPECT_GE(r.imu_bias.max_acc_m_s2, r.imu_bias.acc_end_m_s2.norm());
+  EXPECT_GT(r.imu_bias.max_acc_at_s, 0.0);
+  EXPECT_LE(r.imu_bias.max_acc_at_s, 16.5);
+}
+
 TEST(LiveReport, ScansThatNeverArriveMakeTheRunDegradedAndNameTheLidar) {
   const sim::Simulator sim = office(6.0);
   const RunReport ok = systemReport(sim, {});

@@ -59,6 +59,13 @@ struct RunReport {
     std::size_t map_points_judged = 0, map_points_removed = 0, dynamic_map_points = 0;
     double map_assembly_s = 0.0;
   };
+  // The IMU biases the estimator settled on: a MEMS IMU's stay within tenths of a m/s^2 and a few
+  // hundredths of a rad/s; far beyond, the LiDARs and the IMU disagree on the motion.
+  struct ImuBias {
+    Eigen::Vector3d acc_end_m_s2 = Eigen::Vector3d::Zero(), gyro_end_rad_s = Eigen::Vector3d::Zero();
+    double max_acc_m_s2 = 0.0, max_gyro_rad_s = 0.0;  // largest norms over the tracked sweeps
+    double max_acc_at_s = 0.0, max_gyro_at_s = 0.0;   // seconds from the first IMU sample
+  };
   // High-water marks of what the run held: the queues are bounded, so the resident memory is too.
   struct Memory {
     std::size_t sweeps_waiting_for_imu_max = 0;                     // at most ~2 s of sweeps (OnlinePipeline)
@@ -112,6 +119,7 @@ struct RunReport {
   Localization localization;
   Input input;
   imu::ImuInitResult imu_init;
+  ImuBias imu_bias;
   Sweeps sweeps;
   Json degeneracy = Json::object();
   std::map<std::string, LidarFigures> features;

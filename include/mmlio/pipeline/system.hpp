@@ -99,6 +99,7 @@ class System {
   void judgeTrust(RunReport* report, Stamp stream_end_ns, const TrustLimits& limits) const;
   void reportLocalization(RunReport* report) const;
   void sampleCalibration(Stamp stamp_ns);
+  void trackImuBias(const estimator::SweepResult& r);
   std::vector<RunReport::RefinedCalibration> refinedCalibration() const;
   /// Estimator stamps back in the input's time (they differ after a time-base jump).
   Trajectory inputTime(Trajectory trajectory) const;
@@ -113,6 +114,7 @@ class System {
   RunReport::Sweeps sweeps_;
   RunReport::Dynamic dynamic_;
   std::map<std::string, RunReport::LidarFigures> lidars_;
+  RunReport::ImuBias imu_bias_;
   StageStats timing_;
   std::vector<RunReport::SweepSample> timeline_;
   PoseLog odometry_poses_;  // estimator stamps: the back end corrects them by its keyframes' stamps
