@@ -131,6 +131,8 @@ void run(const RunArgs& a) {
   options.session_dir = a.session;
   options.initial_pose = initial_pose;
   options.stop = &g_stop;
+  // A mount `calibration: auto` has just found on the same start needs no second look.
+  options.check_mount = cfg.calibration.rfind("auto", 0) != 0;
   options.trust.max_degraded_fraction = a.max_degraded_percent / 100.0;
   options.trust.max_drift_sigma_m = a.max_drift_m;
   std::signal(SIGINT, onStopSignal);

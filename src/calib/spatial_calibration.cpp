@@ -121,11 +121,13 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
                                                   const std::vector<Eigen::Vector3d>& solid_in,
                                                   const std::optional<Eigen::Isometry3d>& guess,
                                                   const SpatialCalibrationConfig& cfg) {
+  using Refusal = SpatialCalibrationResult::Refusal;
   SpatialCalibrationResult res;
   const auto solid = map::voxelCentroids(inRange(solid_in, cfg.min_range_m, cfg.max_range_m), cfg.target_voxel_m);
   const auto spinning = map::voxelCentroids(inRange(spinning_in, cfg.min_range_m, cfg.max_range_m), cfg.source_voxel_m);
   res.solid_points = static_cast<int>(solid.size());
   if (static_cast<int>(solid.size()) < cfg.min_points || static_cast<int>(spinning.size()) < cfg.min_points) {
+    res.refusal = Refusal::kTooFewPoints;
     res.message = "too few points to calibrate (solid-state " + std::to_string(solid.size()) + ", spinning " +
                   std::to_string(spinning.size()) + " within " + fmt(cfg.min_range_m) + "-" + fmt(cfg.max_range_m) +
                   " m; need " + std::to_string(cfg.min_points) + "): is either LiDAR blocked or missing at the start?";
@@ -155,7 +157,7 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
 
   Attempt best;
   if (guess) best = attempt(*guess);
-  if (!agrees(best)) {
+  if (!agrees(best) && cfg.yaw_search) {
     res.yaw_searched = true;
     const Eigen::Vector3d t0 = guess ? Eigen::Vector3d(guess->translation()) : Eigen::Vector3d::Zero();
     const Eigen::Matrix3d R0 = guess ? Eigen::Matrix3d(guess->linear()) : Eigen::Matrix3d::Identity();
@@ -201,6 +203,7 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
         explained(finalists[1]) >= cfg.ambiguity_ratio * explained(finalists[0])) {
       res.T_solid_spinning = finalists[0].gicp.T_target_source;
       res.spinning_points = finalists[0].source_points;
+      res.refusal = Refusal::kAmbiguous;
       res.message = "two mounts fit the start about equally (spinning LiDAR yaw " +
                     fmt(yawDeg(finalists[0].gicp.T_target_source)) + " and " +
                     fmt(yawDeg(finalists[1].gicp.T_target_source)) +
@@ -218,17 +221,20 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
   res.hessian = g.hessian;
   res.seen_through = best.seen_through;
   if (best.source_points < cfg.min_points) {
+    res.refusal = Refusal::kNoOverlap;
     res.message = "the spinning LiDAR sees fewer than " + std::to_string(cfg.min_points) +
                   " points inside the solid-state field of view: the two LiDARs do not overlap enough";
     return res;
   }
   if (!g.converged) {
+    res.refusal = Refusal::kNotConverged;
     res.message = "GICP did not converge (" + std::to_string(g.inliers) +
                   " correspondences): give a rough "
                   "T_imu_sensor for the spinning LiDAR in the config, or start the bag facing a structured scene";
     return res;
   }
   if (best.seen_through > cfg.max_seen_through) {
+    res.refusal = Refusal::kSeenThrough;
     res.message = fmt(100 * best.seen_through, 2) +
                   " % of the spinning points in view lie where the solid-state "
                   "LiDAR sees through (at most " +
@@ -237,6 +243,7 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
     return res;
   }
   if (g.fitness_m > cfg.max_fitness_m || g.overlap < cfg.min_overlap) {
+    res.refusal = Refusal::kDisagree;
     res.message = "GICP fitness " + fmt(g.fitness_m) + " m, overlap " + fmt(g.overlap) +
                   " (need <= " + fmt(cfg.max_fitness_m) + " m, >= " + fmt(cfg.min_overlap) +
                   "): the clouds do not agree; check that the rig stood still and both LiDARs see the same scene";
@@ -247,6 +254,7 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(g.hessian.topLeftCorner<3, 3>());
   const double conditioning = es.eigenvalues()(0) / std::max(es.eigenvalues()(2), 1e-12);
   if (conditioning < cfg.min_translation_conditioning) {
+    res.refusal = Refusal::kDegenerate;
     res.message = "the overlapping region constrains the extrinsic poorly (translation conditioning " +
                   fmt(conditioning) + " < " + fmt(cfg.min_translation_conditioning) +
                   "): start the bag facing a corner or furniture, not a single wall";

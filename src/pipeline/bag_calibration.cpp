@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <Eigen/Eigenvalues>
 #include <sstream>
 
 #include "mmlio/config/source_options.hpp"
@@ -24,7 +25,7 @@ std::string fmt(double v, int precision = 3) {
 struct Collected {
   std::vector<ImuSample> imu;
   std::vector<LidarScan> solid_frames, spinning_rest, spinning_all;
-  Stamp start_ns = 0;
+  Stamp start_ns = 0, first_lidar_ns = 0;
 };
 
 constexpr double kTurnMarginS = 0.35;  // > the offset search range + a sweep: pairs stay together
@@ -39,30 +40,39 @@ bool turningNear(const std::vector<ImuSample>& imu, Stamp sweep_start, double ma
   return false;
 }
 
-}  // namespace
+std::vector<Eigen::Vector3d> positionsOf(const std::vector<LidarScan>& scans) {
+  std::size_t n = 0;
+  for (const LidarScan& s : scans) n += s.points.size();
+  std::vector<Eigen::Vector3d> pts;
+  pts.reserve(n);
+  for (const LidarScan& s : scans)
+    for (const Point& p : s.points) pts.emplace_back(p.xyz.cast<double>());
+  return pts;
+}
 
-BagCalibrationResult calibrateBag(const std::string& bag_path, const config::RigConfig& cfg_in,
-                                  const BagCalibrationOptions& opt) {
-  BagCalibrationResult res;
+/// The config's first spinning and first solid-state LiDAR (null where there is none).
+std::pair<const config::LidarConfig*, const config::LidarConfig*> lidarPair(const config::RigConfig& cfg) {
   const config::LidarConfig *spinning = nullptr, *solid = nullptr;
-  for (const config::LidarConfig& l : cfg_in.lidars) {
+  for (const config::LidarConfig& l : cfg.lidars) {
     if (l.kind() == LidarKind::kSpinning && !spinning) spinning = &l;
     if (l.kind() == LidarKind::kSolidState && !solid) solid = &l;
   }
-  if (!spinning || !solid)
-    throw Error("calibration needs one spinning and one solid-state LiDAR in the config (found " +
-                std::string(spinning ? "a spinning one" : "no spinning one") + " and " +
-                std::string(solid ? "a solid-state one" : "no solid-state one") + ")");
-  res.spinning = spinning->name;
-  res.solid = solid->name;
+  return {spinning, solid};
+}
 
-  // ---- read the start of the bag: IMU, the stationary LiDAR data, sweeps for the clock offset ----
-  io::BagSource source(bag_path, config::bagSourceOptions(cfg_in, "hvi"));
+double restSeconds(const BagCalibrationOptions& opt) {
+  return 0.1 * std::max(opt.solid_frames, opt.spinning_sweeps) + 0.05;
+}
+
+/// The bag's start: IMU, the solid-state frames and spinning sweeps of the still window, and (for the
+/// clock offset) the spinning sweeps near turns within opt.temporal_window_s.
+Collected collectStart(const std::string& bag_path, const config::RigConfig& cfg, const config::LidarConfig& solid,
+                       const config::LidarConfig& spinning, const BagCalibrationOptions& opt) {
+  io::BagSource source(bag_path, config::bagSourceOptions(cfg, "hvi"));
   Collected c;
   c.start_ns = source.beginNs();
-  const double rest_s = 0.1 * std::max(opt.solid_frames, opt.spinning_sweeps) + 0.05;
+  const double rest_s = restSeconds(opt);
   const Stamp temporal_end = c.start_ns + fromSec(opt.estimate_time_offset ? opt.temporal_window_s : rest_s + 0.5);
-  Stamp first_lidar = 0;
   std::deque<LidarScan> pending;
   const double turn_rate = opt.temporal.min_rate_rad_s;
   io::SensorEvent ev;
@@ -73,11 +83,11 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
       continue;
     }
     LidarScan& scan = ev.scan;
-    if (!first_lidar) first_lidar = scan.start_ns;
-    const bool in_rest = scan.start_ns < first_lidar + fromSec(rest_s);
-    if (scan.sensor == solid->name && in_rest && static_cast<int>(c.solid_frames.size()) < opt.solid_frames) {
+    if (!c.first_lidar_ns) c.first_lidar_ns = scan.start_ns;
+    const bool in_rest = scan.start_ns < c.first_lidar_ns + fromSec(rest_s);
+    if (scan.sensor == solid.name && in_rest && static_cast<int>(c.solid_frames.size()) < opt.solid_frames) {
       c.solid_frames.push_back(scan);
-    } else if (scan.sensor == spinning->name) {
+    } else if (scan.sensor == spinning.name) {
       if (in_rest && static_cast<int>(c.spinning_rest.size()) < opt.spinning_sweeps) c.spinning_rest.push_back(scan);
       if (opt.estimate_time_offset) {
         // The scan-to-scan ICP works on 0.1 m voxels: thinner sweeps lose nothing and keep memory low.
@@ -96,11 +106,17 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
   }
   for (LidarScan& scan : pending)
     if (turningNear(c.imu, scan.start_ns, kTurnMarginS, turn_rate)) c.spinning_all.push_back(std::move(scan));
-  if (c.solid_frames.empty()) throw Error("no '" + solid->name + "' frames at the start of " + bag_path);
-  if (c.spinning_rest.empty()) throw Error("no '" + spinning->name + "' sweeps at the start of " + bag_path);
+  if (c.solid_frames.empty()) throw Error("no '" + solid.name + "' frames at the start of " + bag_path);
+  if (c.spinning_rest.empty()) throw Error("no '" + spinning.name + "' sweeps at the start of " + bag_path);
 
-  // ---- stationary? (the spatial step assumes both LiDARs see the same, still scene) ----
-  const Stamp rest_begin = first_lidar, rest_end = first_lidar + fromSec(rest_s);
+  return c;
+}
+
+/// The gyroscope's mean over the still window; throws when the rig moves in it (the spatial step
+/// assumes both LiDARs see the same, still scene).
+Eigen::Vector3d stillGyroMean(const Collected& c, const std::string& bag_path, const BagCalibrationOptions& opt) {
+  const double rest_s = restSeconds(opt);
+  const Stamp rest_begin = c.first_lidar_ns, rest_end = c.first_lidar_ns + fromSec(rest_s);
   Eigen::Vector3d gyro_mean = Eigen::Vector3d::Zero(), acc_mean = Eigen::Vector3d::Zero();
   int n = 0;
   for (const ImuSample& s : c.imu)
@@ -141,16 +157,26 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
                 " m/s^2): calibration needs it standing still at "
                 "the start; cut the bag to begin at rest (rosbag filter) or record a still second first");
 
+  return gyro_mean;
+}
+
+}  // namespace
+
+BagCalibrationResult calibrateBag(const std::string& bag_path, const config::RigConfig& cfg_in,
+                                  const BagCalibrationOptions& opt) {
+  BagCalibrationResult res;
+  const auto [spinning, solid] = lidarPair(cfg_in);
+  if (!spinning || !solid)
+    throw Error("calibration needs one spinning and one solid-state LiDAR in the config (found " +
+                std::string(spinning ? "a spinning one" : "no spinning one") + " and " +
+                std::string(solid ? "a solid-state one" : "no solid-state one") + ")");
+  res.spinning = spinning->name;
+  res.solid = solid->name;
+
+  const Collected c = collectStart(bag_path, cfg_in, *solid, *spinning, opt);
+  const Eigen::Vector3d gyro_mean = stillGyroMean(c, bag_path, opt);
+
   // ---- spatial ----
-  const auto positionsOf = [](const std::vector<LidarScan>& scans) {
-    std::size_t n = 0;
-    for (const LidarScan& s : scans) n += s.points.size();
-    std::vector<Eigen::Vector3d> pts;
-    pts.reserve(n);
-    for (const LidarScan& s : scans)
-      for (const Point& p : s.points) pts.emplace_back(p.xyz.cast<double>());
-    return pts;
-  };
   const std::vector<Eigen::Vector3d> solid_pts = positionsOf(c.solid_frames);
   const std::vector<Eigen::Vector3d> spinning_pts = positionsOf(c.spinning_rest);
   const Eigen::Isometry3d guess = solid->T_imu_sensor.inverse() * spinning->T_imu_sensor;
@@ -213,6 +239,73 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
   j["temporal"] = res.temporal.message;
   res.report = j;
   return res;
+}
+
+MountCheck checkMountAtStart(const std::string& bag_path, const config::RigConfig& cfg) {
+  MountCheck check;
+  const auto [spinning, solid] = lidarPair(cfg);
+  if (!spinning || !solid) return check;
+  check.lidar = spinning->name;
+  BagCalibrationOptions opt;
+  opt.estimate_time_offset = false;
+  opt.spatial.yaw_search = false;
+  calib::SpatialCalibrationResult r;
+  try {
+    const Collected c = collectStart(bag_path, cfg, *solid, *spinning, opt);
+    if (c.solid_frames.empty() || c.spinning_rest.empty()) throw Error("a LiDAR is missing at the start");
+    stillGyroMean(c, bag_path, opt);
+    const Eigen::Isometry3d given = solid->T_imu_sensor.inverse() * spinning->T_imu_sensor;
+    r = calib::calibrateSpinningToSolid(positionsOf(c.spinning_rest), positionsOf(c.solid_frames), given, opt.spatial);
+    // Moved along what the start constrains: a start facing a hall's wall leaves GICP free to slide
+    // a right mount along it by decimetres.
+    const Eigen::Vector3d shift = r.T_solid_spinning.translation() - given.translation();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(r.hessian.topLeftCorner<3, 3>());
+    for (int i = 0; i < 3; ++i)
+      if (es.eigenvalues()(i) >= kMountCheckConstrained * es.eigenvalues()(2))
+        check.moved_m = std::hypot(check.moved_m, es.eigenvectors().col(i).dot(shift));
+    check.moved_deg = Eigen::AngleAxisd((given.inverse() * r.T_solid_spinning).rotation()).angle() * 180.0 / M_PI;
+  } catch (const Error& e) {
+    check.message = std::string("not checked: ") + e.what();
+    return check;
+  }
+  check.seen_through = r.seen_through;
+  check.overlap = r.overlap;
+  using Refusal = calib::SpatialCalibrationResult::Refusal;
+  // GICP's strict convergence test fails on correspondences flickering at the fine gate too: the
+  // clouds' agreement decides then.
+  const calib::SpatialCalibrationConfig& sc = opt.spatial;
+  const bool clouds_agree =
+      r.overlap >= sc.min_overlap && r.fitness_m <= sc.max_fitness_m && r.seen_through <= sc.max_seen_through;
+  switch (r.refusal) {
+    case Refusal::kTooFewPoints:
+    case Refusal::kNoOverlap:
+    case Refusal::kDegenerate:
+    case Refusal::kAmbiguous:
+      check.message = "not checked: " + r.message;
+      return check;
+    case Refusal::kNotConverged:
+      if (clouds_agree) break;
+      [[fallthrough]];
+    case Refusal::kSeenThrough:
+    case Refusal::kDisagree:
+      check.checked = true;
+      check.agrees = false;
+      check.message = "the start's clouds contradict the mount given for '" + spinning->name + "' (overlap " +
+                      fmt(r.overlap, 3) + ", fitness " + fmt(r.fitness_m, 3) + " m, " + fmt(100 * r.seen_through, 2) +
+                      " % of its points where the solid-state LiDAR sees through)";
+      return check;
+    case Refusal::kNone:
+      break;
+  }
+  check.checked = true;
+  // What GICP moves a right mount by is the calibration's error, a few millimetres and hundredths
+  // of a degree; a rig file's rough mount a few centimetres and degrees (online refinement's job).
+  check.agrees = check.moved_m <= kMountCheckMaxMoveM && check.moved_deg <= kMountCheckMaxTurnDeg;
+  check.message = check.agrees ? "the start's clouds agree with the mount given for '" + spinning->name + "' (" +
+                                     fmt(1e3 * check.moved_m, 3) + " mm, " + fmt(check.moved_deg, 3) + " deg)"
+                               : "the start's clouds put '" + spinning->name + "' " + fmt(1e2 * check.moved_m, 3) +
+                                     " cm and " + fmt(check.moved_deg, 3) + " deg from the mount given";
+  return check;
 }
 
 }  // namespace mmlio::pipeline

@@ -184,6 +184,11 @@ Json toJson(const RunReport& r) {
                      {"gyro_bias_rad_s", vec3(r.imu_init.gyro_bias)},
                      {"acc_scale", r.input.imu_acc_scale},
                      {"message", r.imu_init.message}};
+  if (!r.mount_check.lidar.empty())
+    rep["mount_check"] = {{"lidar", r.mount_check.lidar},         {"checked", r.mount_check.checked},
+                          {"agrees", r.mount_check.agrees},       {"moved_m", r.mount_check.moved_m},
+                          {"moved_deg", r.mount_check.moved_deg}, {"seen_through", r.mount_check.seen_through},
+                          {"overlap", r.mount_check.overlap},     {"message", r.mount_check.message}};
   rep["imu_bias"] = {
       {"acc_end_m_s2", vec3(r.imu_bias.acc_end_m_s2)}, {"gyro_end_rad_s", vec3(r.imu_bias.gyro_end_rad_s)},
       {"max_acc_m_s2", r.imu_bias.max_acc_m_s2},       {"max_acc_at_s", r.imu_bias.max_acc_at_s},

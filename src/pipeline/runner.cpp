@@ -15,6 +15,7 @@
 #include "mmlio/core/timer.hpp"
 #include "mmlio/estimator/odometry.hpp"
 #include "mmlio/io/bag_source.hpp"
+#include "mmlio/pipeline/bag_calibration.hpp"
 #include "mmlio/pipeline/progress.hpp"
 #include "mmlio/pipeline/system.hpp"
 
@@ -174,6 +175,11 @@ RunResult runPass(const RunOptions& options) {
                   : result.interrupted ? std::string("interrupted")
                                        : report.inputStatus();
 
+  if (options.mount_check) {
+    report.mount_check = *options.mount_check;
+    if (report.mount_check.checked && !report.mount_check.agrees && report.untrusted.empty())
+      report.untrusted = report.mount_check.message + " (mmlio calibrate finds it)";
+  }
   result.untrusted = report.untrusted;
   if (!result.complete) result.untrusted = "the bag ended early: " + result.error;
   if (result.interrupted) result.untrusted = "interrupted";
@@ -256,6 +262,14 @@ void writeRefinedCalibration(const std::string& path, const config::RigConfig& c
 
 RunResult runBag(const RunOptions& options) {
   RunOptions pass = options;
+  const std::string mode = options.mode.empty() ? options.config.mode : options.mode;
+  if (options.check_mount && !options.mount_check && mode == "hvi") {
+    pass.mount_check = checkMountAtStart(options.bag_path, options.config);
+    if (pass.mount_check->checked && !pass.mount_check->agrees)
+      log::warn(pass.mount_check->message, ": the outputs will not be trusted; run mmlio calibrate");
+    else if (!pass.mount_check->lidar.empty())
+      log::info("mount check: ", pass.mount_check->message);
+  }
   const bool rerun = options.config.estimator.online_calibration.rerun && options.replays <= 1 && !options.session;
   // Passes that may be run again keep their calibration fixed and only estimate it.
   if (rerun) pass.config.estimator.online_calibration.apply = false;

@@ -399,6 +399,37 @@ std::string officeBag(const sim::Simulator& sim, const std::string& name,
   return path;
 }
 
+TEST(RunBag, ASpinningLidarMountTheStartContradictsMakesTheOutputsUntrusted) {
+  const sim::Simulator sim = office(3.0);
+  RunOptions options;
+  options.config = testing::simRigConfig(sim);
+  options.config.mapping.loop_enabled = false;
+  options.progress = false;
+  options.mode = "hvi";
+  options.check_mount = true;
+  options.bag_path = officeBag(sim, "mmlio_mount_check.bag", [](const ImuSample&) { return true; });
+  const RunResult right = runBag(options);
+  const MountCheck& ok = right.report.mount_check;
+  std::printf("true mount: %s\n", ok.message.c_str());
+  EXPECT_EQ(ok.lidar, "velodyne");
+  EXPECT_TRUE(ok.checked);
+  EXPECT_TRUE(ok.agrees);
+  EXPECT_LT(ok.moved_m, 0.01);
+  EXPECT_LT(ok.moved_deg, 0.1);
+  EXPECT_TRUE(right.untrusted.empty()) << right.untrusted;
+
+  // The Velodyne written into the rig file turned by a quarter about its axis.
+  for (config::LidarConfig& l : options.config.lidars)
+    if (l.name == "velodyne")
+      l.T_imu_sensor.linear() = l.T_imu_sensor.linear() * Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ());
+  const RunResult turned = runBag(options);
+  const MountCheck& bad = turned.report.mount_check;
+  std::printf("turned mount: %s\n", bad.message.c_str());
+  EXPECT_TRUE(bad.checked);
+  EXPECT_FALSE(bad.agrees);
+  EXPECT_NE(turned.untrusted.find("contradict"), std::string::npos) << turned.untrusted;
+}
+
 TEST(RunBag, AStopRequestEndsTheRunWithWhatWasComputedWrittenAndFlagged) {
   // What Ctrl-C / SIGTERM do to `mmlio run`: the handler sets the stop flag; here a thread sets it
   // once the run has tracked for a while. The whole office walk, so that no machine runs it in

@@ -26,6 +26,7 @@ struct SpatialCalibrationConfig {
   double max_range_m = 40.0;
   double target_voxel_m = 0.05;                // accumulated solid-state cloud
   double source_voxel_m = 0.05;                // spinning sweep
+  bool yaw_search = true;                      // false: only the guess is tried (checking a given mount)
   double yaw_step_deg = 15.0;                  // yaw search grid
   double max_fitness_m = 0.05;                 // accept: mean inlier distance at most this ...
   double min_overlap = 0.5;                    // ... and this fraction of cropped spinning points matched
@@ -61,7 +62,20 @@ struct MountCandidate {
 };
 
 struct SpatialCalibrationResult {
+  // Why it was refused: the start cannot tell (too few points, no overlap, degenerate, ambiguous)
+  // or the clouds contradict the mount found (not converged, seen through, disagree).
+  enum class Refusal {
+    kNone,
+    kTooFewPoints,
+    kNoOverlap,
+    kNotConverged,
+    kSeenThrough,
+    kDisagree,
+    kDegenerate,
+    kAmbiguous
+  };
   bool ok = false;
+  Refusal refusal = Refusal::kNone;
   std::string message;  // what was found, or why it was refused
   Eigen::Isometry3d T_solid_spinning = Eigen::Isometry3d::Identity();
   double fitness_m = 0, overlap = 0;

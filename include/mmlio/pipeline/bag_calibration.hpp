@@ -11,6 +11,7 @@
 #include "mmlio/config/calib_file.hpp"
 #include "mmlio/config/rig_config.hpp"
 #include "mmlio/pipeline/json.hpp"
+#include "mmlio/pipeline/mount_check.hpp"
 
 namespace mmlio::pipeline {
 
@@ -35,6 +36,10 @@ struct BagCalibrationResult {
   Json report;                       // what was measured, for report.json
   YAML::Node extra;                  // fitness, overlap, points, offset sigma: for writeCalibration
 };
+
+/// Whether the spinning LiDAR's mount given in a rig file agrees with the solid-state LiDAR's view
+/// at the bag's still start (see MountCheck).
+MountCheck checkMountAtStart(const std::string& bag_path, const config::RigConfig& cfg);
 
 /// Throws mmlio::Error with a one-line reason when it cannot calibrate: the config lacks a spinning
 /// or a solid-state LiDAR, the rig moves during the stationary window, too few points, no overlap,

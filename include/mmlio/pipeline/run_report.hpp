@@ -17,6 +17,7 @@
 #include "mmlio/pipeline/imu_gate.hpp"
 #include "mmlio/pipeline/json.hpp"
 #include "mmlio/pipeline/stream_tally.hpp"
+#include "mmlio/pipeline/mount_check.hpp"
 #include "mmlio/pipeline/stage_stats.hpp"
 
 namespace mmlio::pipeline {
@@ -118,6 +119,7 @@ struct RunReport {
   Provenance run;
   Localization localization;
   Input input;
+  MountCheck mount_check;  // HVI runs from a rig file: the spinning LiDAR's mount on the still start
   imu::ImuInitResult imu_init;
   ImuBias imu_bias;
   Sweeps sweeps;

@@ -11,6 +11,7 @@
 
 #include "mmlio/config/rig_config.hpp"
 #include "mmlio/core/types.hpp"
+#include "mmlio/pipeline/mount_check.hpp"
 #include "mmlio/pipeline/run_report.hpp"
 #include "mmlio/pipeline/stage_stats.hpp"
 #include "mmlio/pipeline/system.hpp"
@@ -41,6 +42,10 @@ struct RunOptions {
   std::vector<RunReport::RefinedCalibration> first_pass_calibration;
   int pass = 1;
   bool write_if_interrupted = true;
+  // HVI: check the spinning LiDAR's mount on the bag's still start first (checkMountAtStart); one
+  // that the start's clouds contradict makes the outputs untrusted.
+  bool check_mount = false;
+  std::optional<MountCheck> mount_check;  // its result, carried into every pass's report
   /// Every tracked sweep's stamp, stage times and pass of the bag (0 unless replayed), on the
   /// reading thread (bench records its time-and-memory curve).
   std::function<void(Stamp sweep_end_ns, const StageTimes& times_ms, int replay)> on_sweep;
