@@ -108,6 +108,87 @@ double yawDeg(const Eigen::Isometry3d& T) {
   return std::atan2(x.y(), x.x()) / kDeg;
 }
 
+/// GICP runs from given mounts on the spinning points each puts in view, judged as the
+/// calibration judges them, and the yaw search built of them.
+class MountSearch {
+ public:
+  struct Attempt {
+    GicpResult gicp;
+    int source_points = 0;
+    double seen_through = 0;
+  };
+
+  MountSearch(const std::vector<Eigen::Vector3d>& spinning, const std::vector<Eigen::Vector3d>& solid,
+              const SpatialCalibrationConfig& cfg)
+      : spinning_(spinning), solid_(solid), cfg_(cfg), seen_through_(solid, cfg) {}
+
+  /// One GICP run from an initial T_solid_spinning, on the spinning points that fall in the view.
+  Attempt attempt(const Eigen::Isometry3d& init) const {
+    Attempt a;
+    const auto source = cropToSolidView(spinning_, init, cfg_);
+    a.source_points = static_cast<int>(source.size());
+    if (a.source_points < cfg_.min_points) return a;
+    a.gicp = gicp(source, solid_, init, cfg_.gicp);
+    a.seen_through = seen_through_.fraction(spinning_, a.gicp.T_target_source);
+    return a;
+  }
+
+  bool agrees(const Attempt& a) const {
+    return a.gicp.converged && a.gicp.fitness_m <= cfg_.max_fitness_m && a.gicp.overlap >= cfg_.min_overlap &&
+           a.seen_through <= cfg_.max_seen_through;
+  }
+
+  /// Matched points not seen through: what ranks the finalists.
+  static double explained(const Attempt& a) { return a.gicp.inliers * (1.0 - a.seen_through); }
+
+  /// GICP from every yaw_step_deg about the solid-state LiDAR's vertical axis (the guess's
+  /// translation and tilt kept), then the best distinct results measured again: agreeing ones
+  /// first, by points explained.
+  std::vector<Attempt> finalists(const std::optional<Eigen::Isometry3d>& guess) const {
+    const Eigen::Vector3d t0 = guess ? Eigen::Vector3d(guess->translation()) : Eigen::Vector3d::Zero();
+    const Eigen::Matrix3d R0 = guess ? Eigen::Matrix3d(guess->linear()) : Eigen::Matrix3d::Identity();
+    const int steps = std::max(1, static_cast<int>(std::round(360.0 / cfg_.yaw_step_deg)));
+    std::vector<Attempt> tried;
+    for (int i = 0; i < steps; ++i) {
+      Eigen::Isometry3d init = Eigen::Isometry3d::Identity();
+      init.linear() = Eigen::AngleAxisd(i * 2 * M_PI / steps, Eigen::Vector3d::UnitZ()).toRotationMatrix() * R0;
+      init.translation() = t0;
+      Attempt a = attempt(init);
+      if (a.gicp.converged) tried.push_back(std::move(a));
+    }
+    // A start's matched fraction counts only the points that start put in view: a wrong one with few
+    // points in view can match nearly all of them. The best few are measured again on the view
+    // their own result gives, and compared by how many points they explain.
+    std::stable_sort(tried.begin(), tried.end(), [](const Attempt& a, const Attempt& b) {
+      return a.gicp.overlap / std::max(a.gicp.fitness_m, 1e-4) > b.gicp.overlap / std::max(b.gicp.fitness_m, 1e-4);
+    });
+    std::vector<Attempt> out;
+    for (const Attempt& a : tried) {
+      if (static_cast<int>(out.size()) >= cfg_.yaw_finalists) break;
+      Attempt m = attempt(a.gicp.T_target_source);
+      // Started where GICP settled once, it is a measurement: it stands on enough correspondences
+      // (flickering at the fine gate, or sliding along a wall, it may not pass the strict test).
+      m.gicp.converged = m.gicp.inliers >= cfg_.gicp.min_correspondences;
+      if (!m.gicp.converged) continue;
+      const bool known = std::any_of(out.begin(), out.end(), [&](const Attempt& f) {
+        return sameMount(f.gicp.T_target_source, m.gicp.T_target_source, cfg_);
+      });
+      if (!known) out.push_back(std::move(m));
+    }
+    std::stable_sort(out.begin(), out.end(), [&](const Attempt& a, const Attempt& b) {
+      if (agrees(a) != agrees(b)) return agrees(a);
+      return explained(a) > explained(b);
+    });
+    return out;
+  }
+
+ private:
+  const std::vector<Eigen::Vector3d>& spinning_;
+  const std::vector<Eigen::Vector3d>& solid_;
+  const SpatialCalibrationConfig& cfg_;
+  SeenThrough seen_through_;
+};
+
 std::string fmt(double v, int precision = 3) {
   std::ostringstream os;
   os.precision(precision);
@@ -134,73 +215,19 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
     return res;
   }
 
-  // One GICP run from an initial T_solid_spinning, on the spinning points that fall in the view.
-  const SeenThrough seen_through(solid, cfg);
-  struct Attempt {
-    GicpResult gicp;
-    int source_points = 0;
-    double seen_through = 0;
-  };
-  const auto attempt = [&](const Eigen::Isometry3d& init) {
-    Attempt a;
-    const auto source = cropToSolidView(spinning, init, cfg);
-    a.source_points = static_cast<int>(source.size());
-    if (a.source_points < cfg.min_points) return a;
-    a.gicp = gicp(source, solid, init, cfg.gicp);
-    a.seen_through = seen_through.fraction(spinning, a.gicp.T_target_source);
-    return a;
-  };
-  const auto agrees = [&](const Attempt& a) {
-    return a.gicp.converged && a.gicp.fitness_m <= cfg.max_fitness_m && a.gicp.overlap >= cfg.min_overlap &&
-           a.seen_through <= cfg.max_seen_through;
-  };
-
-  Attempt best;
-  if (guess) best = attempt(*guess);
-  if (!agrees(best) && cfg.yaw_search) {
+  const MountSearch search(spinning, solid, cfg);
+  MountSearch::Attempt best;
+  if (guess) best = search.attempt(*guess);
+  if (!search.agrees(best) && cfg.yaw_search) {
     res.yaw_searched = true;
-    const Eigen::Vector3d t0 = guess ? Eigen::Vector3d(guess->translation()) : Eigen::Vector3d::Zero();
-    const Eigen::Matrix3d R0 = guess ? Eigen::Matrix3d(guess->linear()) : Eigen::Matrix3d::Identity();
-    const int steps = std::max(1, static_cast<int>(std::round(360.0 / cfg.yaw_step_deg)));
-    std::vector<Attempt> tried;
-    for (int i = 0; i < steps; ++i) {
-      Eigen::Isometry3d init = Eigen::Isometry3d::Identity();
-      init.linear() = Eigen::AngleAxisd(i * 2 * M_PI / steps, Eigen::Vector3d::UnitZ()).toRotationMatrix() * R0;
-      init.translation() = t0;
-      Attempt a = attempt(init);
-      if (a.gicp.converged) tried.push_back(std::move(a));
-    }
-    // A start's matched fraction counts only the points that start put in view: a wrong one with few
-    // points in view can match nearly all of them. The best few are measured again on the view
-    // their own result gives, and compared by how many points they explain.
-    std::stable_sort(tried.begin(), tried.end(), [](const Attempt& a, const Attempt& b) {
-      return a.gicp.overlap / std::max(a.gicp.fitness_m, 1e-4) > b.gicp.overlap / std::max(b.gicp.fitness_m, 1e-4);
-    });
-    std::vector<Attempt> finalists;
-    for (const Attempt& a : tried) {
-      if (static_cast<int>(finalists.size()) >= cfg.yaw_finalists) break;
-      Attempt m = attempt(a.gicp.T_target_source);
-      // Started where GICP settled once, it is a measurement: it stands on enough correspondences
-      // (flickering at the fine gate, or sliding along a wall, it may not pass the strict test).
-      m.gicp.converged = m.gicp.inliers >= cfg.gicp.min_correspondences;
-      if (!m.gicp.converged) continue;
-      const bool known = std::any_of(finalists.begin(), finalists.end(), [&](const Attempt& f) {
-        return sameMount(f.gicp.T_target_source, m.gicp.T_target_source, cfg);
-      });
-      if (!known) finalists.push_back(std::move(m));
-    }
-    const auto explained = [](const Attempt& a) { return a.gicp.inliers * (1.0 - a.seen_through); };
-    std::stable_sort(finalists.begin(), finalists.end(), [&](const Attempt& a, const Attempt& b) {
-      if (agrees(a) != agrees(b)) return agrees(a);
-      return explained(a) > explained(b);
-    });
-    for (const Attempt& f : finalists) {
+    const std::vector<MountSearch::Attempt> finalists = search.finalists(guess);
+    for (const MountSearch::Attempt& f : finalists) {
       res.candidates.push_back({f.gicp.T_target_source, yawDeg(f.gicp.T_target_source), f.gicp.fitness_m,
-                                f.gicp.overlap, f.gicp.inliers, f.source_points, f.seen_through, agrees(f)});
+                                f.gicp.overlap, f.gicp.inliers, f.source_points, f.seen_through, search.agrees(f)});
     }
     if (!finalists.empty()) best = finalists.front();
-    if (finalists.size() >= 2 && agrees(finalists[0]) && agrees(finalists[1]) &&
-        explained(finalists[1]) >= cfg.ambiguity_ratio * explained(finalists[0])) {
+    if (finalists.size() >= 2 && search.agrees(finalists[0]) && search.agrees(finalists[1]) &&
+        MountSearch::explained(finalists[1]) >= cfg.ambiguity_ratio * MountSearch::explained(finalists[0])) {
       res.T_solid_spinning = finalists[0].gicp.T_target_source;
       res.spinning_points = finalists[0].source_points;
       res.refusal = Refusal::kAmbiguous;

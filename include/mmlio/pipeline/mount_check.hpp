@@ -18,10 +18,9 @@ struct MountCheck {
   double seen_through = 0, overlap = 0;
   std::string message;
 };
-constexpr double kMountCheckMaxMoveM = 0.15;   // a given mount GICP moves further than this ...
+constexpr double kMountCheckMaxMoveM = 0.15;    // a given mount GICP moves further than this ...
 constexpr double kMountCheckMaxTurnDeg = 10.0;  // ... or turns by more is grossly wrong
 constexpr double kMountCheckConstrained = 0.2;  // a direction whose information is this fraction of the
                                                 // strongest one's is constrained
-
 
 }  // namespace mmlio::pipeline
