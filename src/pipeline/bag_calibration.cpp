@@ -22,6 +22,14 @@ std::string fmt(double v, int precision = 3) {
   return os.str();
 }
 
+std::string fixed(double v, int decimals) {
+  std::ostringstream os;
+  os.setf(std::ios::fixed);
+  os.precision(decimals);
+  os << v;
+  return os.str();
+}
+
 struct Collected {
   std::vector<ImuSample> imu;
   std::vector<LidarScan> solid_frames, spinning_rest, spinning_all;
@@ -302,9 +310,9 @@ MountCheck checkMountAtStart(const std::string& bag_path, const config::RigConfi
   // of a degree; a rig file's rough mount a few centimetres and degrees (online refinement's job).
   check.agrees = check.moved_m <= kMountCheckMaxMoveM && check.moved_deg <= kMountCheckMaxTurnDeg;
   check.message = check.agrees ? "the start's clouds agree with the mount given for '" + spinning->name + "' (" +
-                                     fmt(1e3 * check.moved_m, 3) + " mm, " + fmt(check.moved_deg, 3) + " deg)"
-                               : "the start's clouds put '" + spinning->name + "' " + fmt(1e2 * check.moved_m, 3) +
-                                     " cm and " + fmt(check.moved_deg, 3) + " deg from the mount given";
+                                     fixed(1e3 * check.moved_m, 1) + " mm, " + fixed(check.moved_deg, 3) + " deg)"
+                               : "the start's clouds put '" + spinning->name + "' " + fixed(1e2 * check.moved_m, 1) +
+                                     " cm and " + fixed(check.moved_deg, 1) + " deg from the mount given";
   return check;
 }
 
