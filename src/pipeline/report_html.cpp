@@ -331,6 +331,9 @@ std::string startupHtml(const RunReport& r) {
           fixed(r.imu_bias.gyro_end_rad_s.norm(), 4) + " rad/s (at most " + fixed(r.imu_bias.max_gyro_rad_s, 4) +
           " at " + fixed(r.imu_bias.max_gyro_at_s, 0) + " s)");
   row("extrinsics", r.run.calibration + " (config_used.yaml holds them as run)");
+  if (!r.mount_check.lidar.empty())
+    row("mount check",
+        std::string(r.mount_check.checked && !r.mount_check.agrees ? "CONTRADICTED: " : "") + r.mount_check.message);
   row("mode", r.input.mode + ", config " + (r.input.config.empty() ? "built-in defaults" : r.input.config));
   html +=
       "</table><table id=\"lidars\"><tr><th>LiDAR</th><th>sweeps</th><th>points / sweep</th>"
