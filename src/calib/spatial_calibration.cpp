@@ -134,8 +134,7 @@ class MountSearch {
   }
 
   bool agrees(const Attempt& a) const {
-    return a.gicp.converged && a.gicp.fitness_m <= cfg_.max_fitness_m && a.gicp.overlap >= cfg_.min_overlap &&
-           a.seen_through <= cfg_.max_seen_through;
+    return a.gicp.converged && cloudsAgree(a.gicp.fitness_m, a.gicp.overlap, a.seen_through, cfg_);
   }
 
   /// Matched points not seen through: what ranks the finalists.
@@ -197,6 +196,10 @@ std::string fmt(double v, int precision = 3) {
 }
 
 }  // namespace
+
+bool cloudsAgree(double fitness_m, double overlap, double seen_through, const SpatialCalibrationConfig& cfg) {
+  return fitness_m <= cfg.max_fitness_m && overlap >= cfg.min_overlap && seen_through <= cfg.max_seen_through;
+}
 
 SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vector3d>& spinning_in,
                                                   const std::vector<Eigen::Vector3d>& solid_in,

@@ -9,6 +9,7 @@
 #include "mmlio/config/source_options.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
+#include "mmlio/eval/svg_plot.hpp"
 #include "mmlio/io/bag_source.hpp"
 #include "mmlio/lidar/voxel_filter.hpp"
 
@@ -22,13 +23,7 @@ std::string fmt(double v, int precision = 3) {
   return os.str();
 }
 
-std::string fixed(double v, int decimals) {
-  std::ostringstream os;
-  os.setf(std::ios::fixed);
-  os.precision(decimals);
-  os << v;
-  return os.str();
-}
+const auto fixed = eval::fixedText;
 
 struct Collected {
   std::vector<ImuSample> imu;
@@ -260,7 +255,6 @@ MountCheck checkMountAtStart(const std::string& bag_path, const config::RigConfi
   calib::SpatialCalibrationResult r;
   try {
     const Collected c = collectStart(bag_path, cfg, *solid, *spinning, opt);
-    if (c.solid_frames.empty() || c.spinning_rest.empty()) throw Error("a LiDAR is missing at the start");
     stillGyroMean(c, bag_path, opt);
     const Eigen::Isometry3d given = solid->T_imu_sensor.inverse() * spinning->T_imu_sensor;
     r = calib::calibrateSpinningToSolid(positionsOf(c.spinning_rest), positionsOf(c.solid_frames), given, opt.spatial);
@@ -281,9 +275,7 @@ MountCheck checkMountAtStart(const std::string& bag_path, const config::RigConfi
   using Refusal = calib::SpatialCalibrationResult::Refusal;
   // GICP's strict convergence test fails on correspondences flickering at the fine gate too: the
   // clouds' agreement decides then.
-  const calib::SpatialCalibrationConfig& sc = opt.spatial;
-  const bool clouds_agree =
-      r.overlap >= sc.min_overlap && r.fitness_m <= sc.max_fitness_m && r.seen_through <= sc.max_seen_through;
+  const bool clouds_agree = calib::cloudsAgree(r.fitness_m, r.overlap, r.seen_through, opt.spatial);
   switch (r.refusal) {
     case Refusal::kTooFewPoints:
     case Refusal::kNoOverlap:

@@ -69,11 +69,14 @@ class CreatedFolder {
   std::filesystem::path leaf_, outermost_;
 };
 
+/// The mode asked for, else the config's.
+std::string modeOf(const RunOptions& options) { return options.mode.empty() ? options.config.mode : options.mode; }
+
 RunResult runPass(const RunOptions& options) {
   const config::RigConfig& cfg = options.config;
   CreatedFolder out_folder(options.out_dir,
                            options.out_dir.empty() ? std::filesystem::path() : checkWritable(options.out_dir));
-  const std::string mode = options.mode.empty() ? cfg.mode : options.mode;
+  const std::string mode = modeOf(options);
   if (!config::isValidMode(mode)) throw Error("unknown mode '" + mode + "' (expected hvi, vi or hi)");
 
   io::BagSource source(options.bag_path, config::bagSourceOptions(cfg, mode));
@@ -262,8 +265,7 @@ void writeRefinedCalibration(const std::string& path, const config::RigConfig& c
 
 RunResult runBag(const RunOptions& options) {
   RunOptions pass = options;
-  const std::string mode = options.mode.empty() ? options.config.mode : options.mode;
-  if (options.check_mount && !options.mount_check && mode == "hvi") {
+  if (options.check_mount && !options.mount_check && modeOf(options) == "hvi") {
     pass.mount_check = checkMountAtStart(options.bag_path, options.config);
     if (pass.mount_check->checked && !pass.mount_check->agrees)
       log::warn(pass.mount_check->message, ": the outputs will not be trusted; run mmlio calibrate");

@@ -399,15 +399,21 @@ std::string officeBag(const sim::Simulator& sim, const std::string& name,
   return path;
 }
 
-TEST(RunBag, ASpinningLidarMountTheStartContradictsMakesTheOutputsUntrusted) {
-  const sim::Simulator sim = office(3.0);
+/// The simulated office written whole to a bag, run without loop closure or a progress bar.
+RunOptions officeRun(const sim::Simulator& sim, const std::string& bag_name) {
   RunOptions options;
   options.config = testing::simRigConfig(sim);
   options.config.mapping.loop_enabled = false;
   options.progress = false;
+  options.bag_path = officeBag(sim, bag_name, [](const ImuSample&) { return true; });
+  return options;
+}
+
+TEST(RunBag, ASpinningLidarMountTheStartContradictsMakesTheOutputsUntrusted) {
+  const sim::Simulator sim = office(3.0);
+  RunOptions options = officeRun(sim, "mmlio_mount_check.bag");
   options.mode = "hvi";
   options.check_mount = true;
-  options.bag_path = officeBag(sim, "mmlio_mount_check.bag", [](const ImuSample&) { return true; });
   const RunResult right = runBag(options);
   const MountCheck& ok = right.report.mount_check;
   std::printf("true mount: %s\n", ok.message.c_str());
@@ -428,6 +434,7 @@ TEST(RunBag, ASpinningLidarMountTheStartContradictsMakesTheOutputsUntrusted) {
   EXPECT_TRUE(bad.checked);
   EXPECT_FALSE(bad.agrees);
   EXPECT_NE(turned.untrusted.find("contradict"), std::string::npos) << turned.untrusted;
+  std::filesystem::remove(options.bag_path);
 }
 
 TEST(RunBag, AStopRequestEndsTheRunWithWhatWasComputedWrittenAndFlagged) {
@@ -466,13 +473,9 @@ TEST(RunBag, AStopRequestEndsTheRunWithWhatWasComputedWrittenAndFlagged) {
 
 TEST(RunBag, TheReportNamesItsMmlioAndTheConfigThatRerunsTheRunExactly) {
   const sim::Simulator sim = office(4.0);
-  RunOptions options;
-  options.config = testing::simRigConfig(sim);
-  options.config.mapping.loop_enabled = false;
-  options.progress = false;
+  RunOptions options = officeRun(sim, "mmlio_provenance.bag");
   options.mode = "vi";
   options.out_dir = (std::filesystem::temp_directory_path() / "mmlio_provenance_out").string();
-  options.bag_path = officeBag(sim, "mmlio_provenance.bag", [](const ImuSample&) { return true; });
   const RunResult first = runBag(options);
   std::ifstream in(options.out_dir + "/report.json");
   const Json report = Json::parse(in);
@@ -516,12 +519,8 @@ TEST(RunBag, ADurationCutEndsWithAnOrdinaryTrackedSweepAndFullCoverage) {
   // `--duration`: the scans stop at the cut; the IMU must not stop before the last sweep ends
   // (that sweep was reported degraded, and coverage above 1).
   const sim::Simulator sim = office(8.0);
-  RunOptions options;
-  options.config = testing::simRigConfig(sim);
-  options.config.mapping.loop_enabled = false;
-  options.progress = false;
+  RunOptions options = officeRun(sim, "mmlio_duration_cut.bag");
   options.max_duration_s = 5.0;
-  options.bag_path = officeBag(sim, "mmlio_duration_cut.bag", [](const ImuSample&) { return true; });
   const RunResult r = runBag(options);
   ASSERT_GT(r.trajectory.size(), 10u);
   EXPECT_EQ(r.report.sweeps.degraded, 0u);
@@ -557,12 +556,8 @@ TEST(RunBag, TellsItsTimingObserverEverySweepOnceInTimeOrderAcrossReplays) {
   // What `mmlio bench --curve` records: one call per sweep the report times, later stamps for the
   // second pass of a replayed bag, and the same stage times the report sums.
   const sim::Simulator sim = office(6.0);
-  RunOptions options;
-  options.config = testing::simRigConfig(sim);
-  options.config.mapping.loop_enabled = false;
-  options.progress = false;
+  RunOptions options = officeRun(sim, "mmlio_timing_observer.bag");
   options.replays = 2;
-  options.bag_path = officeBag(sim, "mmlio_timing_observer.bag", [](const ImuSample&) { return true; });
   std::vector<Stamp> stamps;
   std::vector<int> replays;
   double observed_ms = 0.0;
@@ -595,13 +590,8 @@ TEST(RunBag, TellsItsTimingObserverEverySweepOnceInTimeOrderAcrossReplays) {
 TEST(RunBag, OutputsAreFlaggedUntrustedWhenTooManySweepsAreDegraded) {
   const sim::Simulator sim = office(8.0);
   const Stamp imu_ends = sim.startNs() + fromSec(5.0);
-  RunOptions options;
-  options.config = testing::simRigConfig(sim);
-  options.config.mapping.loop_enabled = false;
-  options.progress = false;
+  RunOptions options = officeRun(sim, "mmlio_clean.bag");
   options.out_dir = (std::filesystem::temp_directory_path() / "mmlio_untrusted_out").string();
-
-  options.bag_path = officeBag(sim, "mmlio_clean.bag", [](const ImuSample&) { return true; });
   const RunResult clean = runBag(options);
   EXPECT_TRUE(clean.untrusted.empty()) << clean.untrusted;
   // The report's drift bound: what the IMU carried alone. Millimetres in the office; a bound below

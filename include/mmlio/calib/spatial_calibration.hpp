@@ -86,6 +86,10 @@ struct SpatialCalibrationResult {
   Eigen::Matrix<double, 6, 6> hessian = Eigen::Matrix<double, 6, 6>::Zero();  // GICP, (dp, dtheta)
 };
 
+/// Whether a registration of the two views passes the calibration's tests of agreement: fitness,
+/// overlap and the fraction seen through (convergence aside).
+bool cloudsAgree(double fitness_m, double overlap, double seen_through, const SpatialCalibrationConfig& cfg);
+
 /// spinning: one (or a few stacked) stationary sweep(s), spinning-sensor frame; solid: the
 /// accumulated stationary frames, solid-sensor frame. guess: T_solid_spinning from the config, or
 /// none for the yaw search.

@@ -16,9 +16,9 @@
 #include "mmlio/io/decode_stats.hpp"
 #include "mmlio/pipeline/imu_gate.hpp"
 #include "mmlio/pipeline/json.hpp"
-#include "mmlio/pipeline/stream_tally.hpp"
 #include "mmlio/pipeline/mount_check.hpp"
 #include "mmlio/pipeline/stage_stats.hpp"
+#include "mmlio/pipeline/stream_tally.hpp"
 
 namespace mmlio::pipeline {
 
