@@ -246,8 +246,8 @@ void LiveFeeder::onSweep(const estimator::SweepResult& r) {
     save_due_ = true;
     last_save_ns_ = r.state.stamp_ns;
   }
-  // Keyframes: the corrected path (loops move it), and now and then the global map.
-  if (outlet_.wantsPath()) outlet_.path(toPath(system_.trajectory(), options_.map_frame));
+  // Keyframes: the corrected route (loops move it), and now and then the global map.
+  if (outlet_.wantsPath()) outlet_.path(toPath(system_.route(), options_.map_frame));
   const double since_map_s = toSec(r.state.stamp_ns - last_map_ns_);
   if (options_.map_publish_period_s > 0 && since_map_s >= options_.map_publish_period_s && outlet_.wantsMap()) {
     outlet_.map(toPointCloud2(system_.map(), Eigen::Isometry3d::Identity(), stamp_ns, options_.map_frame));

@@ -68,10 +68,11 @@ class DdsOutlet : public live::Outlet {
   }
   bool wantsScan() const override { return scan_.matched() > 0; }
   void scan(const sensor_msgs::PointCloud2& msg) override { scan_.write(encode(msg)); }
-  // Transient local: a late rviz2 gets the last one, so they are always written.
-  bool wantsPath() const override { return true; }
+  // Built only for a reader (the map costs a pause of the back end); transient local gives a
+  // late rviz2 the last one written.
+  bool wantsPath() const override { return path_.matched() > 0; }
   void path(const nav_msgs::Path& msg) override { path_.write(encode(msg)); }
-  bool wantsMap() const override { return true; }
+  bool wantsMap() const override { return map_.matched() > 0; }
   void map(const sensor_msgs::PointCloud2& msg) override { map_.write(encode(msg)); }
   void diagnostics(const diagnostic_msgs::DiagnosticArray& msg) override { diagnostics_.write(encode(msg)); }
 

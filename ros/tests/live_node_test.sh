@@ -87,7 +87,11 @@ check(("map", "odom") in edges and ("odom", "imu") in edges, f"tf tree map -> od
 
 paths = [m for _, m, _ in bag.read_messages(topics=["/mmlio_node/path"])]
 check(len(paths) >= 5 and paths[-1].header.frame_id == "map", f"path published per keyframe in map ({len(paths)})")
-check(len(paths) > 0 and len(paths[-1].poses) >= 0.9 * len(odom), "the last path holds every pose")
+keyframes = json.load(open(f"{work}/node/report.json"))["sweeps"]["keyframes"]
+last = paths[-1].poses if paths else []
+check(keyframes - 2 <= len(last) <= keyframes + 1, f"the last path holds the keyframes ({len(last)}; {keyframes} keyframes)")
+check(len(last) > 0 and min(abs(last[-1].header.stamp.to_sec() - t) for t in stamps) < 1e-4 and
+      all(a.header.stamp < b.header.stamp for a, b in zip(last, last[1:])), "... in order, at poses the odometry gave")
 maps = [m for _, m, _ in bag.read_messages(topics=["/mmlio_node/map"])]
 check(len(maps) >= 3 and maps[-1].width > 10000 and maps[-1].header.frame_id == "map",
       f"map refreshed ({len(maps)} clouds, last {maps[-1].width if maps else 0} points)")

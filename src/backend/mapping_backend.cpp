@@ -170,6 +170,12 @@ Trajectory MappingBackend::corrected(const PoseLog& odometry) const {
   return out;
 }
 
+Trajectory MappingBackend::corrected(Trajectory odometry) const {
+  if (graph_.loops() == 0) return odometry;
+  for (StampedPose& p : odometry) p.T_world_body = graph_.correct(p.stamp_ns, p.T_world_body);
+  return odometry;
+}
+
 Eigen::Isometry3d MappingBackend::correction() const {
   if (graph_.loops() == 0) return Eigen::Isometry3d::Identity();  // (a loop implies newest_ is set)
   return graph_.correct(newest_.stamp_ns, newest_.T_world_body) * newest_.T_world_body.inverse();

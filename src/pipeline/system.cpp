@@ -73,6 +73,7 @@ void System::onSweep(estimator::SweepResult r) {
   Stopwatch handoff;
   sampleCalibration(r.state.stamp_ns);
   trackImuBias(r);
+  if (r.keyframe) keyframe_poses_.push_back(odometry_poses_.size());
   odometry_poses_.push_back({r.state.stamp_ns, r.state.pose()});
   if (localizer_ && r.keyframe && r.status == estimator::SweepResult::Status::kTracking) {
     std::vector<Eigen::Vector3d> cloud;
@@ -184,6 +185,16 @@ Trajectory System::inputTime(Trajectory trajectory) const {
 Trajectory System::trajectory() const {
   if (localizer_) return inputTime(localizer_->inMap(odometry_poses_.trajectory()));
   return inputTime(mapping_.read([this](const backend::MappingBackend& b) { return b.corrected(odometry_poses_); }));
+}
+
+Trajectory System::route() const {
+  Trajectory odometry;
+  odometry.reserve(keyframe_poses_.size() + 1);
+  for (const std::size_t i : keyframe_poses_) odometry.push_back(odometry_poses_[i]);
+  if (!odometry_poses_.empty() && (keyframe_poses_.empty() || keyframe_poses_.back() + 1 != odometry_poses_.size()))
+    odometry.push_back(odometry_poses_.back());
+  if (localizer_) return inputTime(localizer_->inMap(odometry));
+  return inputTime(mapping_.read([&](const backend::MappingBackend& b) { return b.corrected(std::move(odometry)); }));
 }
 
 Stamp System::externalStamp(Stamp internal_ns) const { return online_.externalStamp(internal_ns); }

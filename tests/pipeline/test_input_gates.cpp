@@ -331,6 +331,27 @@ TEST(InputGates, AJumpOfTheWholeStreamsTimeBaseIsARestartNotAGapToExtrapolate) {
   EXPECT_EQ(imu_only, 0u);
 }
 
+TEST(System, ItsRouteIsTheKeyframesAndTheNewestPoseAsTheTrajectoryHasThem) {
+  // The live nodes' path: bounded by the keyframes, not rebuilt from every pose at each one.
+  const sim::Simulator sim = office(16.0);
+  pipeline::System system(testing::simRigConfig(sim), "hvi");
+  testing::replay(sim, system, {}, {});
+  system.finish();
+  const Trajectory route = system.route(), trajectory = system.trajectory();
+  const std::size_t keyframes = system.report().sweeps.keyframes;
+  ASSERT_GE(keyframes, 5u);
+  ASSERT_GE(route.size(), keyframes);
+  ASSERT_LE(route.size(), keyframes + 1);
+  EXPECT_LT(route.size(), trajectory.size() / 4);
+  EXPECT_EQ(route.back().stamp_ns, trajectory.back().stamp_ns);
+  for (const StampedPose& p : route) {
+    const auto same = std::find_if(trajectory.begin(), trajectory.end(),
+                                   [&](const StampedPose& q) { return q.stamp_ns == p.stamp_ns; });
+    ASSERT_NE(same, trajectory.end());
+    EXPECT_EQ(same->T_world_body.matrix(), p.T_world_body.matrix());
+  }
+}
+
 TEST(InputGates, ABagPlayedAgainFromItsStartGoesOnFromWhereTheRigIs) {
   // `rosbag play -l` of a route that ends where it starts (the 16 s office: out and back, at rest
   // at both ends): the second pass's stamps repeat the first's, 16 s back, IMU and LiDARs alike.

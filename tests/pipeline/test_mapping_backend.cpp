@@ -77,6 +77,12 @@ TEST(MappingBackend, ClosesTheLoopOfTheLastKeyframeWhenTheRunFinishes) {
   const Eigen::Isometry3d end_error = w.truth.back().inverse() * corrected.back().T_world_body;
   EXPECT_LT(end_error.translation().norm(), 0.25 * drift_m) << "drift before the loop " << drift_m << " m";
   EXPECT_LT(Eigen::AngleAxisd(end_error.rotation()).angle(), 0.2 * kDeg);
+  // A few poses (the live path's) are corrected exactly as in the whole log.
+  const PoseLog log = odometryLog(w);
+  const Trajectory few = backend.corrected(Trajectory{log[2], log[5]});
+  ASSERT_EQ(few.size(), 2u);
+  EXPECT_EQ(few[0].T_world_body.matrix(), corrected[2].T_world_body.matrix());
+  EXPECT_EQ(few[1].T_world_body.matrix(), corrected[5].T_world_body.matrix());
   backend.finish();  // idempotent: the last keyframe has had its check
   EXPECT_EQ(backend.loops(), 1u);
 }

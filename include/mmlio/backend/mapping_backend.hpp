@@ -47,6 +47,8 @@ class MappingBackend {
   /// The odometry's poses (estimator stamps, as the sweeps carried them) corrected by the loops
   /// closed so far. The log is the caller's: one run keeps its poses once.
   Trajectory corrected(const PoseLog& odometry) const;
+  /// The same for a few of them (the live path's keyframes).
+  Trajectory corrected(Trajectory odometry) const;
   /// The loops' correction at the newest odometry pose: T_world_corrected * T_world_odometry^-1
   /// (identity before the first loop). Live nodes publish it as map -> odom.
   Eigen::Isometry3d correction() const;

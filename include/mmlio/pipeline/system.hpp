@@ -72,6 +72,9 @@ class System {
   std::size_t posesTracked() const { return odometry_poses_.size(); }
   /// The same poses corrected by the loops closed so far.
   Trajectory trajectory() const;
+  /// The keyframes' poses and the newest one, corrected as trajectory() is: the live nodes' path
+  /// (the whole trajectory rebuilt at every keyframe would cost O(poses) each time).
+  Trajectory route() const;
   /// Loop correction at the newest pose, map <- odom (identity before the first loop).
   Eigen::Isometry3d mapFromOdom() const;
   /// The input's stamp of an estimator stamp (SweepResult::state): after a jump of the input's time
@@ -118,6 +121,7 @@ class System {
   StageStats timing_;
   std::vector<RunReport::SweepSample> timeline_;
   PoseLog odometry_poses_;  // estimator stamps: the back end corrects them by its keyframes' stamps
+  std::vector<std::size_t> keyframe_poses_;  // indices into odometry_poses_
   Stamp first_imu_ns_ = 0;
   std::vector<RunReport::RefinedCalibration::Sample> calibration_series_;
   Stamp next_calibration_sample_ns_ = 0;
