@@ -63,17 +63,31 @@ std::vector<Eigen::Matrix3d> planeCovariances(const std::vector<Eigen::Vector3d>
   return covariancesWithTree(points, tree, k, plane_epsilon);
 }
 
+GicpTarget::GicpTarget(std::vector<Eigen::Vector3d> points, const GicpConfig& cfg)
+    : points_(std::move(points)), adaptor_{&points_}, tree_(3, adaptor_, map::kdTreeParams()) {
+  tree_.buildIndex();
+  covariances_ = covariancesWithTree(points_, tree_, cfg.covariance_neighbours, cfg.plane_epsilon);
+}
+
 GicpResult gicp(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
+                const Eigen::Isometry3d& T_target_source_guess, const GicpConfig& cfg) {
+  if (source.empty() || target.size() < 3) {
+    GicpResult result;
+    result.T_target_source = T_target_source_guess;
+    return result;
+  }
+  return gicp(source, GicpTarget(target, cfg), T_target_source_guess, cfg);
+}
+
+GicpResult gicp(const std::vector<Eigen::Vector3d>& source, const GicpTarget& target_cloud,
                 const Eigen::Isometry3d& T_target_source_guess, const GicpConfig& cfg) {
   GicpResult result;
   result.T_target_source = T_target_source_guess;
+  const std::vector<Eigen::Vector3d>& target = target_cloud.points();
   if (source.empty() || target.size() < 3) return result;
 
-  CloudAdaptor target_adaptor{&target};
-  KdTree target_tree(3, target_adaptor, map::kdTreeParams());
-  target_tree.buildIndex();
-  const std::vector<Eigen::Matrix3d> target_covs =
-      covariancesWithTree(target, target_tree, cfg.covariance_neighbours, cfg.plane_epsilon);
+  const KdTree& target_tree = target_cloud.tree();
+  const std::vector<Eigen::Matrix3d>& target_covs = target_cloud.covariances();
   std::vector<Eigen::Matrix3d> source_covs;
   if (cfg.source_covariances) {
     source_covs = planeCovariances(source, cfg.covariance_neighbours, cfg.plane_epsilon);

@@ -21,40 +21,79 @@ std::vector<Eigen::Vector3d> inRange(const std::vector<Eigen::Vector3d>& pts, do
   return out;
 }
 
-/// Spinning points (spinning frame) that T_solid_spinning puts inside the solid FOV (+ margin).
+/// Spinning points (spinning frame) that T_solid_spinning puts inside the solid FOV (+ margin) as
+/// seen from one of `views` (the solid-state LiDAR's poses in its start frame).
 std::vector<Eigen::Vector3d> cropToSolidView(const std::vector<Eigen::Vector3d>& spinning,
                                              const Eigen::Isometry3d& T_solid_spinning,
+                                             const std::vector<Eigen::Isometry3d>& views,
                                              const SpatialCalibrationConfig& cfg) {
   const double half_h = (0.5 * cfg.solid_fov_horizontal_deg + cfg.fov_margin_deg) * kDeg;
   const double half_v = (0.5 * cfg.solid_fov_vertical_deg + cfg.fov_margin_deg) * kDeg;
+  std::vector<Eigen::Isometry3d> from_start;
+  from_start.reserve(views.size());
+  for (const Eigen::Isometry3d& v : views) from_start.push_back(v.inverse() * T_solid_spinning);
+  const auto inView = [&](const Eigen::Vector3d& q) {
+    return q.x() > 0 &&  // the solid-state LiDAR looks along +x
+           std::abs(std::atan2(q.y(), q.x())) <= half_h && std::abs(std::atan2(q.z(), q.head<2>().norm())) <= half_v;
+  };
   std::vector<Eigen::Vector3d> out;
-  for (const auto& p : spinning) {
-    const Eigen::Vector3d q = T_solid_spinning * p;
-    if (q.x() <= 0) continue;  // the solid-state LiDAR looks along +x
-    if (std::abs(std::atan2(q.y(), q.x())) > half_h) continue;
-    if (std::abs(std::atan2(q.z(), q.head<2>().norm())) > half_v) continue;
-    out.push_back(p);
-  }
+  for (const auto& p : spinning)
+    if (std::any_of(from_start.begin(), from_start.end(), [&](const Eigen::Isometry3d& T) { return inView(T * p); }))
+      out.push_back(p);
   return out;
 }
 
-/// The nearest return of the solid-state LiDAR per direction (azimuth, elevation bins of its frame):
-/// what it saw through. A spinning point well in front of that return lies in space the solid-state
-/// LiDAR saw as empty, which a right extrinsic cannot produce (but for the sensors' small parallax).
+/// The nearest return of the solid-state LiDAR per direction (azimuth, elevation bins of its frame),
+/// for each frame it looked from: what it saw through. A spinning point well in front of that
+/// return lies in space the solid-state LiDAR saw as empty, which a right extrinsic cannot produce
+/// (but for the sensors' small parallax). Free space seen from anywhere is free: every frame's own
+/// rays count, not only the start's.
 class SeenThrough {
  public:
-  SeenThrough(const std::vector<Eigen::Vector3d>& solid, const SpatialCalibrationConfig& cfg)
+  SeenThrough(const std::vector<SolidView::Frame>& frames, const SpatialCalibrationConfig& cfg)
       : half_h_((0.5 * cfg.solid_fov_horizontal_deg + cfg.fov_margin_deg) * kDeg),
         half_v_((0.5 * cfg.solid_fov_vertical_deg + cfg.fov_margin_deg) * kDeg),
         bin_(cfg.seen_through_bin_deg * kDeg),
         cols_(static_cast<int>(std::ceil(2 * half_h_ / bin_))),
         rows_(static_cast<int>(std::ceil(2 * half_v_ / bin_))),
-        nearest_(static_cast<std::size_t>(cols_) * static_cast<std::size_t>(rows_),
-                 std::numeric_limits<float>::infinity()),
         margin_m_(cfg.seen_through_margin_m),
         margin_frac_(cfg.seen_through_margin_fraction) {
-    std::vector<float> own(nearest_);
-    for (const auto& q : solid) {
+    for (const SolidView::Frame& f : frames) views_.push_back({f.T_start_sensor.inverse(), nearestReturns(f.returns)});
+  }
+
+  /// Fraction of `spinning` (spinning frame) that T_solid_spinning puts in front of the solid-state
+  /// LiDAR's nearest return in its direction from one of the frames, among the points whose
+  /// direction a frame saw a return in.
+  double fraction(const std::vector<Eigen::Vector3d>& spinning, const Eigen::Isometry3d& T_solid_spinning) const {
+    std::vector<Eigen::Isometry3d> T_sensor_spinning;
+    for (const View& v : views_) T_sensor_spinning.push_back(v.T_sensor_start * T_solid_spinning);
+    int seen = 0, through = 0;
+    for (const auto& p : spinning) {
+      bool seen_here = false, through_here = false;
+      for (std::size_t k = 0; k < views_.size() && !through_here; ++k) {
+        const Eigen::Vector3d q = T_sensor_spinning[k] * p;
+        const int i = index(q);
+        if (i < 0 || !std::isfinite(views_[k].nearest[i])) continue;
+        seen_here = true;
+        const double r = q.norm();
+        through_here = views_[k].nearest[i] > r + margin_m_ + margin_frac_ * r;
+      }
+      seen += seen_here;
+      through += through_here;
+    }
+    return seen > 0 ? static_cast<double>(through) / seen : 0.0;
+  }
+
+ private:
+  struct View {
+    Eigen::Isometry3d T_sensor_start;
+    std::vector<float> nearest;
+  };
+
+  std::vector<float> nearestReturns(const std::vector<Eigen::Vector3d>& returns) const {
+    const std::size_t bins = static_cast<std::size_t>(cols_) * static_cast<std::size_t>(rows_);
+    std::vector<float> own(bins, std::numeric_limits<float>::infinity()), nearest(own);
+    for (const auto& q : returns) {
       const int i = index(q);
       if (i >= 0) own[i] = std::min(own[i], static_cast<float>(q.norm()));
     }
@@ -64,25 +103,10 @@ class SeenThrough {
       for (int c = 0; c < cols_; ++c)
         for (int dr = std::max(0, r - 1); dr <= std::min(rows_ - 1, r + 1); ++dr)
           for (int dc = std::max(0, c - 1); dc <= std::min(cols_ - 1, c + 1); ++dc)
-            nearest_[r * cols_ + c] = std::min(nearest_[r * cols_ + c], own[dr * cols_ + dc]);
+            nearest[r * cols_ + c] = std::min(nearest[r * cols_ + c], own[dr * cols_ + dc]);
+    return nearest;
   }
 
-  /// Fraction of `spinning` (spinning frame) that T_solid_spinning puts in front of the solid-state
-  /// LiDAR's nearest return in its direction, among the points whose direction it saw a return in.
-  double fraction(const std::vector<Eigen::Vector3d>& spinning, const Eigen::Isometry3d& T_solid_spinning) const {
-    int seen = 0, through = 0;
-    for (const auto& p : spinning) {
-      const Eigen::Vector3d q = T_solid_spinning * p;
-      const int i = index(q);
-      if (i < 0 || !std::isfinite(nearest_[i])) continue;
-      ++seen;
-      const double r = q.norm();
-      if (nearest_[i] > r + margin_m_ + margin_frac_ * r) ++through;
-    }
-    return seen > 0 ? static_cast<double>(through) / seen : 0.0;
-  }
-
- private:
   int index(const Eigen::Vector3d& q) const {
     if (q.x() <= 0) return -1;
     const double az = std::atan2(q.y(), q.x()), el = std::atan2(q.z(), q.head<2>().norm());
@@ -93,8 +117,8 @@ class SeenThrough {
 
   double half_h_, half_v_, bin_;
   int cols_, rows_;
-  std::vector<float> nearest_;
   double margin_m_, margin_frac_;
+  std::vector<View> views_;
 };
 
 bool sameMount(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, const SpatialCalibrationConfig& cfg) {
@@ -118,14 +142,16 @@ class MountSearch {
     double seen_through = 0;
   };
 
-  MountSearch(const std::vector<Eigen::Vector3d>& spinning, const std::vector<Eigen::Vector3d>& solid,
-              const SpatialCalibrationConfig& cfg)
-      : spinning_(spinning), solid_(solid), cfg_(cfg), seen_through_(solid, cfg) {}
+  MountSearch(const std::vector<Eigen::Vector3d>& spinning, std::vector<Eigen::Vector3d> solid,
+              const std::vector<SolidView::Frame>& frames, const SpatialCalibrationConfig& cfg)
+      : spinning_(spinning), solid_(std::move(solid), cfg.gicp), cfg_(cfg), seen_through_(frames, cfg) {
+    for (const SolidView::Frame& f : frames) views_.push_back(f.T_start_sensor);
+  }
 
   /// One GICP run from an initial T_solid_spinning, on the spinning points that fall in the view.
   Attempt attempt(const Eigen::Isometry3d& init) const {
     Attempt a;
-    const auto source = cropToSolidView(spinning_, init, cfg_);
+    const auto source = cropToSolidView(spinning_, init, views_, cfg_);
     a.source_points = static_cast<int>(source.size());
     if (a.source_points < cfg_.min_points) return a;
     a.gicp = gicp(source, solid_, init, cfg_.gicp);
@@ -133,8 +159,11 @@ class MountSearch {
     return a;
   }
 
-  bool agrees(const Attempt& a) const {
-    return a.gicp.converged && cloudsAgree(a.gicp.fitness_m, a.gicp.overlap, a.seen_through, cfg_);
+  bool agrees(const Attempt& a) const { return a.gicp.converged && fits(a); }
+  /// The clouds agree, whether or not GICP's last step was still moving by a hair.
+  bool fits(const Attempt& a) const {
+    return a.gicp.inliers >= cfg_.gicp.min_correspondences &&
+           cloudsAgree(a.gicp.fitness_m, a.gicp.overlap, a.seen_through, cfg_);
   }
 
   /// Matched points not seen through: what ranks the finalists.
@@ -183,7 +212,8 @@ class MountSearch {
 
  private:
   const std::vector<Eigen::Vector3d>& spinning_;
-  const std::vector<Eigen::Vector3d>& solid_;
+  const GicpTarget solid_;
+  std::vector<Eigen::Isometry3d> views_;
   const SpatialCalibrationConfig& cfg_;
   SeenThrough seen_through_;
 };
@@ -201,13 +231,33 @@ bool cloudsAgree(double fitness_m, double overlap, double seen_through, const Sp
   return fitness_m <= cfg.max_fitness_m && overlap >= cfg.min_overlap && seen_through <= cfg.max_seen_through;
 }
 
-SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vector3d>& spinning_in,
-                                                  const std::vector<Eigen::Vector3d>& solid_in,
+SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vector3d>& spinning,
+                                                  const std::vector<Eigen::Vector3d>& solid,
                                                   const std::optional<Eigen::Isometry3d>& guess,
+                                                  const SpatialCalibrationConfig& cfg) {
+  SolidView view;
+  view.frames.push_back({Eigen::Isometry3d::Identity(), solid});
+  return calibrateSpinningToSolid(spinning, view, guess, cfg);
+}
+
+SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vector3d>& spinning_in,
+                                                  const SolidView& view, const std::optional<Eigen::Isometry3d>& guess,
                                                   const SpatialCalibrationConfig& cfg) {
   using Refusal = SpatialCalibrationResult::Refusal;
   SpatialCalibrationResult res;
-  const auto solid = map::voxelCentroids(inRange(solid_in, cfg.min_range_m, cfg.max_range_m), cfg.target_voxel_m);
+  // Each frame's returns in range, thinned; together, in the start frame, the cloud registered onto.
+  std::vector<SolidView::Frame> frames;
+  for (const SolidView::Frame& f : view.frames)
+    frames.push_back({f.T_start_sensor,
+                      map::voxelCentroids(inRange(f.returns, cfg.min_range_m, cfg.max_range_m), cfg.target_voxel_m)});
+  std::vector<Eigen::Vector3d> solid;
+  if (frames.size() == 1 && frames[0].T_start_sensor.isApprox(Eigen::Isometry3d::Identity())) {
+    solid = frames[0].returns;
+  } else {
+    for (const SolidView::Frame& f : frames)
+      for (const Eigen::Vector3d& p : f.returns) solid.push_back(f.T_start_sensor * p);
+    solid = map::voxelCentroids(solid, cfg.target_voxel_m);
+  }
   const auto spinning = map::voxelCentroids(inRange(spinning_in, cfg.min_range_m, cfg.max_range_m), cfg.source_voxel_m);
   res.solid_points = static_cast<int>(solid.size());
   if (static_cast<int>(solid.size()) < cfg.min_points || static_cast<int>(spinning.size()) < cfg.min_points) {
@@ -218,9 +268,29 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
     return res;
   }
 
-  const MountSearch search(spinning, solid, cfg);
+  const std::size_t solid_points = solid.size();
+  const MountSearch search(spinning, std::move(solid), frames, cfg);
   MountSearch::Attempt best;
   if (guess) best = search.attempt(*guess);
+  if (guess && search.fits(best) && cfg.probe_quarter_turns) {
+    // A guess that fits is not yet the mount: in a view alike turned by a quarter, a guess a
+    // quarter turn off fits as well. Its turns that fit about as well make the view ambiguous.
+    for (int k = 1; k < 4; ++k) {
+      Eigen::Isometry3d turned = *guess;
+      turned.linear() = Eigen::AngleAxisd(k * M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix() * guess->linear();
+      const MountSearch::Attempt a = search.attempt(turned);
+      if (!search.fits(a) || sameMount(a.gicp.T_target_source, best.gicp.T_target_source, cfg) ||
+          MountSearch::explained(a) < cfg.ambiguity_ratio * MountSearch::explained(best))
+        continue;
+      res.T_solid_spinning = best.gicp.T_target_source;
+      res.spinning_points = best.source_points;
+      res.refusal = Refusal::kAmbiguous;
+      res.message = "two mounts fit the start about equally (the one given, spinning LiDAR yaw " +
+                    fmt(yawDeg(best.gicp.T_target_source)) + " deg in the solid-state frame, and it turned to " +
+                    fmt(yawDeg(a.gicp.T_target_source)) + " deg): the start's view looks alike turned";
+      return res;
+    }
+  }
   if (!search.agrees(best) && cfg.yaw_search) {
     res.yaw_searched = true;
     const std::vector<MountSearch::Attempt> finalists = search.finalists(guess);
@@ -293,7 +363,7 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
   res.ok = true;
   res.message = "GICP fitness " + fmt(g.fitness_m) + " m, overlap " + fmt(g.overlap) + ", conditioning " +
                 fmt(conditioning) + " on " + std::to_string(best.source_points) + " spinning / " +
-                std::to_string(solid.size()) + " solid-state points" + (res.yaw_searched ? " (yaw search)" : "");
+                std::to_string(solid_points) + " solid-state points" + (res.yaw_searched ? " (yaw search)" : "");
   return res;
 }
 

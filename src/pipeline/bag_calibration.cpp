@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <optional>
 #include <Eigen/Eigenvalues>
 #include <sstream>
 
@@ -12,6 +13,8 @@
 #include "mmlio/eval/svg_plot.hpp"
 #include "mmlio/io/bag_source.hpp"
 #include "mmlio/lidar/voxel_filter.hpp"
+#include "mmlio/map/kd_tree.hpp"
+#include "mmlio/pipeline/online_pipeline.hpp"
 
 namespace mmlio::pipeline {
 namespace {
@@ -24,6 +27,13 @@ std::string fmt(double v, int precision = 3) {
 }
 
 const auto fixed = eval::fixedText;
+
+void logCandidates(const calib::SpatialCalibrationResult& r) {
+  for (const calib::MountCandidate& m : r.candidates)
+    log::emit(log::Level::kInfo, "yaw search: yaw ", fmt(m.yaw_deg, 4), " deg, ", m.inliers, " of ", m.points_in_view,
+              " spinning points in view matched (fitness ", fmt(m.fitness_m, 3), " m), ", fmt(100 * m.seen_through, 2),
+              " % seen through", m.agrees ? "" : ": disagrees");
+}
 
 struct Collected {
   std::vector<ImuSample> imu;
@@ -163,6 +173,46 @@ Eigen::Vector3d stillGyroMean(const Collected& c, const std::string& bag_path, c
   return gyro_mean;
 }
 
+/// What the solid-state LiDAR sees of the room in the first opt.motion_window_s of the bag, in its
+/// frame at the still start: the still frames, then every fifth frame its own odometry (HI: it and
+/// the IMU) places while the rig stays within opt.motion_radius_m of the start (farther, the
+/// start's sweeps see other sides of things and the odometry's drift grows).
+calib::SolidView solidViewFromMotion(const std::string& bag_path, const config::RigConfig& cfg,
+                                     const config::LidarConfig& solid, const Collected& c,
+                                     const BagCalibrationOptions& opt) {
+  calib::SolidView view;
+  view.frames.push_back({Eigen::Isometry3d::Identity(), positionsOf(c.solid_frames)});
+  std::optional<Eigen::Isometry3d> T_solid0_world;
+  int tracked = 0;
+  OnlinePipeline odometry(cfg, "hi", [&](const estimator::SweepResult& r) {
+    if (r.status != estimator::SweepResult::Status::kTracking) return;
+    const Eigen::Isometry3d T_world_solid = r.state.pose() * solid.T_imu_sensor;
+    if (!T_solid0_world) T_solid0_world = T_world_solid.inverse();
+    if (tracked++ % 5 != 0) return;
+    const Eigen::Isometry3d T_start_solid = *T_solid0_world * T_world_solid;
+    if (T_start_solid.translation().norm() > opt.motion_radius_m) return;
+    // The sweep's points are de-skewed into the body frame at its end: into the sensor's frame there.
+    const Eigen::Isometry3d T_solid_body = solid.T_imu_sensor.inverse();
+    std::vector<Eigen::Vector3d> returns;
+    returns.reserve(r.points_body.size());
+    for (const Point& p : r.points_body) returns.push_back(T_solid_body * p.xyz.cast<double>());
+    view.frames.push_back({T_start_solid, map::voxelCentroids(returns, opt.spatial.target_voxel_m)});
+  });
+  io::BagSource source(bag_path, config::bagSourceOptions(cfg, "hi"));
+  const Stamp end_ns = c.first_lidar_ns + fromSec(opt.motion_window_s);
+  io::SensorEvent ev;
+  while (source.next(&ev)) {
+    if (ev.kind == io::SensorEvent::Kind::kImu) {
+      if (ev.imu.stamp_ns > end_ns) break;
+      odometry.addImu(ev.imu);
+    } else if (ev.scan.start_ns + fromSec(0.2) < end_ns) {  // a sweep the IMU read covers
+      odometry.addScan(std::move(ev.scan));
+    }
+  }
+  odometry.flush();
+  return view;
+}
+
 }  // namespace
 
 BagCalibrationResult calibrateBag(const std::string& bag_path, const config::RigConfig& cfg_in,
@@ -184,10 +234,27 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
   const std::vector<Eigen::Vector3d> spinning_pts = positionsOf(c.spinning_rest);
   const Eigen::Isometry3d guess = solid->T_imu_sensor.inverse() * spinning->T_imu_sensor;
   res.spatial = calib::calibrateSpinningToSolid(spinning_pts, solid_pts, guess, opt.spatial);
-  for (const calib::MountCandidate& m : res.spatial.candidates)
-    log::emit(log::Level::kInfo, "yaw search: yaw ", fmt(m.yaw_deg, 4), " deg, ", m.inliers, " of ", m.points_in_view,
-              " spinning points in view matched (fitness ", fmt(m.fitness_m, 3), " m), ", fmt(100 * m.seen_through, 2),
-              " % seen through", m.agrees ? "" : ": disagrees");
+  logCandidates(res.spatial);
+  if (!res.spatial.ok && opt.motion_window_s > 0) {
+    // A wall or a view alike turned by a quarter: the room around, seen while the rig moves on,
+    // tells what the start cannot.
+    log::emit(log::Level::kInfo, "the still start cannot tell the mount (", res.spatial.message,
+              "); mapping the first ", fmt(opt.motion_window_s), " s of motion with '", solid->name, "'");
+    const calib::SolidView view = solidViewFromMotion(bag_path, cfg_in, *solid, c, opt);
+    calib::SpatialCalibrationResult moving = calib::calibrateSpinningToSolid(spinning_pts, view, guess, opt.spatial);
+    logCandidates(moving);
+    if (!moving.ok)
+      throw Error("spatial calibration refused: at the still start, " + res.spatial.message + "; with the first " +
+                  fmt(opt.motion_window_s) + " s of motion (" + std::to_string(view.frames.size() - 1) +
+                  " frames within " + fmt(opt.motion_radius_m) + " m), " + moving.message);
+    moving.message += " (the first " + fmt(opt.motion_window_s) +
+                      " s of motion: " + std::to_string(view.frames.size() - 1) + " solid-state frames)";
+    // Its map carries the solid-state odometry's drift (centimetres): the run's online
+    // calibration takes the rest. (The still start, told the way round, is no help: what it
+    // could not tell, it cannot measure either; a hall's start slides it decimetres along a wall.)
+    res.spatial = std::move(moving);
+    res.from_motion = true;
+  }
   if (!res.spatial.ok) throw Error("spatial calibration refused: " + res.spatial.message);
   const Eigen::Isometry3d T_imu_spinning = solid->T_imu_sensor * res.spatial.T_solid_spinning;
   log::emit(log::Level::kInfo, "spatial calibration: ", res.spatial.message);
@@ -217,6 +284,7 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
   res.extra[spinning->name]["reference_points_used"] = res.spatial.solid_points;
   res.extra[spinning->name]["yaw_searched"] = res.spatial.yaw_searched;
   res.extra[spinning->name]["seen_through"] = res.spatial.seen_through;
+  res.extra[spinning->name]["from_motion"] = res.from_motion;
   res.extra[spinning->name]["time_offset_estimated"] = res.temporal.ok;
   if (res.temporal.ok) {
     res.extra[spinning->name]["time_offset_sigma_s"] = res.temporal.sigma_s;
@@ -235,6 +303,7 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
   j["points_used"] = res.spatial.spinning_points;
   j["reference_points_used"] = res.spatial.solid_points;
   j["spatial"] = res.spatial.message;
+  j["from_motion"] = res.from_motion;
   j["time_offset_s"] = offset_s;
   j["time_offset_estimated"] = res.temporal.ok;
   j["time_offset_sigma_s"] = res.temporal.sigma_s;
@@ -244,32 +313,22 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
   return res;
 }
 
-MountCheck checkMountAtStart(const std::string& bag_path, const config::RigConfig& cfg) {
+namespace {
+
+/// The mount check's verdict on GICP run from the given mount (no search) on what `where` names.
+MountCheck judgeMount(const calib::SpatialCalibrationResult& r, const Eigen::Isometry3d& given,
+                      const std::string& spinning, const std::string& where, const BagCalibrationOptions& opt,
+                      bool judge_move = true) {
   MountCheck check;
-  const auto [spinning, solid] = lidarPair(cfg);
-  if (!spinning || !solid) return check;
-  check.lidar = spinning->name;
-  BagCalibrationOptions opt;
-  opt.estimate_time_offset = false;
-  opt.spatial.yaw_search = false;
-  calib::SpatialCalibrationResult r;
-  try {
-    const Collected c = collectStart(bag_path, cfg, *solid, *spinning, opt);
-    stillGyroMean(c, bag_path, opt);
-    const Eigen::Isometry3d given = solid->T_imu_sensor.inverse() * spinning->T_imu_sensor;
-    r = calib::calibrateSpinningToSolid(positionsOf(c.spinning_rest), positionsOf(c.solid_frames), given, opt.spatial);
-    // Moved along what the start constrains: a start facing a hall's wall leaves GICP free to slide
-    // a right mount along it by decimetres.
-    const Eigen::Vector3d shift = r.T_solid_spinning.translation() - given.translation();
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(r.hessian.topLeftCorner<3, 3>());
-    for (int i = 0; i < 3; ++i)
-      if (es.eigenvalues()(i) >= kMountCheckConstrained * es.eigenvalues()(2))
-        check.moved_m = std::hypot(check.moved_m, es.eigenvectors().col(i).dot(shift));
-    check.moved_deg = Eigen::AngleAxisd((given.inverse() * r.T_solid_spinning).rotation()).angle() * 180.0 / M_PI;
-  } catch (const Error& e) {
-    check.message = std::string("not checked: ") + e.what();
-    return check;
-  }
+  check.lidar = spinning;
+  // Moved along what the view constrains: a start facing a hall's wall leaves GICP free to slide
+  // a right mount along it by decimetres.
+  const Eigen::Vector3d shift = r.T_solid_spinning.translation() - given.translation();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(r.hessian.topLeftCorner<3, 3>());
+  for (int i = 0; i < 3; ++i)
+    if (es.eigenvalues()(i) >= kMountCheckConstrained * es.eigenvalues()(2))
+      check.moved_m = std::hypot(check.moved_m, es.eigenvectors().col(i).dot(shift));
+  check.moved_deg = Eigen::AngleAxisd((given.inverse() * r.T_solid_spinning).rotation()).angle() * 180.0 / M_PI;
   check.seen_through = r.seen_through;
   check.overlap = r.overlap;
   using Refusal = calib::SpatialCalibrationResult::Refusal;
@@ -290,7 +349,7 @@ MountCheck checkMountAtStart(const std::string& bag_path, const config::RigConfi
     case Refusal::kDisagree:
       check.checked = true;
       check.agrees = false;
-      check.message = "the start's clouds contradict the mount given for '" + spinning->name + "' (overlap " +
+      check.message = "the clouds of " + where + " contradict the mount given for '" + spinning + "' (overlap " +
                       fmt(r.overlap, 3) + ", fitness " + fmt(r.fitness_m, 3) + " m, " + fmt(100 * r.seen_through, 2) +
                       " % of its points where the solid-state LiDAR sees through)";
       return check;
@@ -300,12 +359,45 @@ MountCheck checkMountAtStart(const std::string& bag_path, const config::RigConfi
   check.checked = true;
   // What GICP moves a right mount by is the calibration's error, a few millimetres and hundredths
   // of a degree; a rig file's rough mount a few centimetres and degrees (online refinement's job).
-  check.agrees = check.moved_m <= kMountCheckMaxMoveM && check.moved_deg <= kMountCheckMaxTurnDeg;
-  check.message = check.agrees ? "the start's clouds agree with the mount given for '" + spinning->name + "' (" +
+  check.agrees = (!judge_move || check.moved_m <= kMountCheckMaxMoveM) && check.moved_deg <= kMountCheckMaxTurnDeg;
+  check.message = check.agrees ? "the clouds of " + where + " agree with the mount given for '" + spinning + "' (" +
                                      fixed(1e3 * check.moved_m, 1) + " mm, " + fixed(check.moved_deg, 3) + " deg)"
-                               : "the start's clouds put '" + spinning->name + "' " + fixed(1e2 * check.moved_m, 1) +
+                               : "the clouds of " + where + " put '" + spinning + "' " + fixed(1e2 * check.moved_m, 1) +
                                      " cm and " + fixed(check.moved_deg, 1) + " deg from the mount given";
   return check;
+}
+
+}  // namespace
+
+MountCheck checkMountAtStart(const std::string& bag_path, const config::RigConfig& cfg) {
+  MountCheck check;
+  const auto [spinning, solid] = lidarPair(cfg);
+  if (!spinning || !solid) return check;
+  check.lidar = spinning->name;
+  BagCalibrationOptions opt;
+  opt.estimate_time_offset = false;
+  opt.spatial.yaw_search = false;
+  const Eigen::Isometry3d given = solid->T_imu_sensor.inverse() * spinning->T_imu_sensor;
+  try {
+    const Collected c = collectStart(bag_path, cfg, *solid, *spinning, opt);
+    stillGyroMean(c, bag_path, opt);
+    const std::vector<Eigen::Vector3d> spinning_pts = positionsOf(c.spinning_rest);
+    check = judgeMount(calib::calibrateSpinningToSolid(spinning_pts, positionsOf(c.solid_frames), given, opt.spatial),
+                       given, spinning->name, "the still start", opt);
+    if (check.checked) return check;
+    // A wall or a view alike turned: the room around, seen in the first seconds of motion.
+    const calib::SolidView view = solidViewFromMotion(bag_path, cfg, *solid, c, opt);
+    // Its map carries the solid-state odometry's drift (centimetres, decimetres along a wall):
+    // judged by the clouds' agreement and the turn, not by the move.
+    MountCheck moving = judgeMount(calib::calibrateSpinningToSolid(spinning_pts, view, given, opt.spatial), given,
+                                   spinning->name, "the first " + fmt(opt.motion_window_s) + " s of motion", opt,
+                                   /*judge_move=*/false);
+    if (!moving.checked) moving.message = check.message + "; with the first seconds of motion too";
+    return moving;
+  } catch (const Error& e) {
+    check.message = std::string("not checked: ") + e.what();
+    return check;
+  }
 }
 
 }  // namespace mmlio::pipeline

@@ -87,6 +87,36 @@ TEST(YawSearch, FindsTheMountOnceTheSymmetryIsBroken) {
   EXPECT_LT(angleDeg(err), 0.1);
 }
 
+TEST(YawSearch, WhatTheStartCannotTellTheRoomAroundDoes) {
+  // The four-fold room with a cabinet and a shelf behind the rig: the start's view is alike every
+  // quarter turn, the solid-state LiDAR's frames once the rig has turned round (its view of the
+  // first seconds of motion) are not.
+  Scene scene = fourFoldRoom();
+  scene.push_back({{-2.8, -0.6, 0}, {-2.2, 0.3, 2.0}});
+  scene.push_back({{-4.2, 0.6, 0}, {-3.5, 1.3, 1.5}});
+  const Eigen::Isometry3d truth = pose(0, 0, 0.15, 100 * kDeg);
+  const Eigen::Isometry3d start = pose(0, 0, 0.6, 0);
+  const Views v = viewsFrom(scene, start, truth);
+  const SpatialCalibrationResult still = calibrateSpinningToSolid(v.spinning, v.solid, std::nullopt);
+  EXPECT_FALSE(still.ok);
+  EXPECT_EQ(still.refusal, SpatialCalibrationResult::Refusal::kAmbiguous) << still.message;
+
+  SolidView around;
+  around.frames.push_back({Eigen::Isometry3d::Identity(), v.solid});
+  for (int k = 1; k < 8; ++k) {
+    const Eigen::Isometry3d T_start_solid = pose(0.1 * k, 0.05 * k, 0, k * 45 * kDeg);
+    around.frames.push_back({T_start_solid, xyz(solidFrame(scene, start * T_start_solid, 40 + k, 0.005))});
+  }
+  const SpatialCalibrationResult r = calibrateSpinningToSolid(v.spinning, around, std::nullopt);
+  std::printf("%s\n", r.message.c_str());
+  for (const MountCandidate& c : r.candidates)
+    std::printf("  yaw %.1f: %d of %d, seen through %.3f\n", c.yaw_deg, c.inliers, c.points_in_view, c.seen_through);
+  ASSERT_TRUE(r.ok) << r.message;
+  const Eigen::Isometry3d err = truth.inverse() * r.T_solid_spinning;
+  EXPECT_LT(err.translation().norm(), 0.01);
+  EXPECT_LT(angleDeg(err), 0.1);
+}
+
 TEST(YawSearch, AMountThatPutsPointsWhereTheSolidStateLidarSeesThroughIsRefused) {
   // A guess a quarter turn off, in a room without symmetry: the points it puts in view lie
   // in front of walls the solid-state LiDAR sees, so it cannot be right whatever GICP makes of it.

@@ -49,6 +49,27 @@ struct GicpResult {
 /// Plane-regularised covariance of every point from its k nearest neighbours in `points`.
 std::vector<Eigen::Matrix3d> planeCovariances(const std::vector<Eigen::Vector3d>& points, int k, double plane_epsilon);
 
+/// A target cloud with its search tree and covariances (cfg's neighbours and plane epsilon), built
+/// once for many registrations onto it (a yaw search runs dozens).
+class GicpTarget {
+ public:
+  GicpTarget(std::vector<Eigen::Vector3d> points, const GicpConfig& cfg);
+  GicpTarget(const GicpTarget&) = delete;  // the tree refers to points_
+  GicpTarget& operator=(const GicpTarget&) = delete;
+
+  const std::vector<Eigen::Vector3d>& points() const { return points_; }
+  const std::vector<Eigen::Matrix3d>& covariances() const { return covariances_; }
+  const map::KdTree3d& tree() const { return tree_; }
+
+ private:
+  std::vector<Eigen::Vector3d> points_;
+  map::CloudAdaptor adaptor_;
+  map::KdTree3d tree_;
+  std::vector<Eigen::Matrix3d> covariances_;
+};
+
+GicpResult gicp(const std::vector<Eigen::Vector3d>& source, const GicpTarget& target,
+                const Eigen::Isometry3d& T_target_source_guess, const GicpConfig& cfg = GicpConfig());
 GicpResult gicp(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
                 const Eigen::Isometry3d& T_target_source_guess, const GicpConfig& cfg = GicpConfig());
 

@@ -39,6 +39,7 @@ struct SpatialCalibrationConfig {
   double distinct_translation_m = 0.1;         // finalists closer than this and ...
   double distinct_rotation_deg = 5.0;          // ... this are the same mount
   double ambiguity_ratio = 0.8;                // the runner-up explains this fraction of the winner's points: refuse
+  bool probe_quarter_turns = true;             // a guess that fits: its quarter turns fitting as well refuse too
   int min_points = 500;                        // fewer points on either side: refuse
   double min_translation_conditioning = 0.05;  // weakest / strongest translation eigenvalue of the GICP
                                                // Hessian below this: degenerate overlap (a wall), refuse
@@ -90,11 +91,27 @@ struct SpatialCalibrationResult {
 /// overlap and the fraction seen through (convergence aside).
 bool cloudsAgree(double fitness_m, double overlap, double seen_through, const SpatialCalibrationConfig& cfg);
 
+/// What the solid-state LiDAR saw, in its frame at the still start. A still start alone is one
+/// frame; the first seconds of motion (the solid-state LiDAR's own odometry placing its frames)
+/// see the room around. The frames' returns together are the cloud the spinning sweeps are
+/// registered onto, their fields of view the overlap region, their rays the seen-through test.
+struct SolidView {
+  struct Frame {
+    Eigen::Isometry3d T_start_sensor = Eigen::Isometry3d::Identity();
+    std::vector<Eigen::Vector3d> returns;  // in the frame's own sensor frame
+  };
+  std::vector<Frame> frames;
+};
+
 /// spinning: one (or a few stacked) stationary sweep(s), spinning-sensor frame; solid: the
 /// accumulated stationary frames, solid-sensor frame. guess: T_solid_spinning from the config, or
 /// none for the yaw search.
 SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vector3d>& spinning,
                                                   const std::vector<Eigen::Vector3d>& solid,
+                                                  const std::optional<Eigen::Isometry3d>& guess,
+                                                  const SpatialCalibrationConfig& cfg = SpatialCalibrationConfig());
+/// The same onto a solid-state view of several poses (spinning: still sweeps at the start).
+SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vector3d>& spinning, const SolidView& view,
                                                   const std::optional<Eigen::Isometry3d>& guess,
                                                   const SpatialCalibrationConfig& cfg = SpatialCalibrationConfig());
 

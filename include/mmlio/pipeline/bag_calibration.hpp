@@ -24,6 +24,9 @@ struct BagCalibrationOptions {
   double temporal_window_s = 120.0;  // bag time after the start searched for turns (only turning
                                      // sweeps are kept: memory follows the turns, not the window)
   double temporal_voxel_m = 0.05;    // kept sweeps are voxel-filtered (each voxel keeps a point's time)
+  double motion_window_s = 20.0;     // when the still start cannot tell the mount: the solid-state
+                                     // LiDAR's map of this much of the bag (0: refuse instead)
+  double motion_radius_m = 5.0;      // ... of its frames within this distance of the start
   calib::SpatialCalibrationConfig spatial;
   calib::TimeOffsetConfig temporal;
 };
@@ -33,6 +36,7 @@ struct BagCalibrationResult {
   std::string spinning, solid;      // their names
   calib::SpatialCalibrationResult spatial;
   calib::TimeOffsetResult temporal;  // temporal.ok == false: the config's clock offset was kept
+  bool from_motion = false;          // the mount from the first seconds of motion, not the still start
   Json report;                       // what was measured, for report.json
   YAML::Node extra;                  // fitness, overlap, points, offset sigma: for writeCalibration
 };
