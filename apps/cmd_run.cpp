@@ -27,6 +27,7 @@ struct RunArgs {
   std::string bag, config, out = "mmlio_out", mode, calib, gt;
   std::string session;       // localize: the session folder
   std::string initial_pose;  // localize: "x,y,z,yaw_deg" in the session's map frame
+  bool extend = false;       // run --extend: map on in the session
   bool no_progress = false, no_loop = false;
   double duration_s = 0.0;
   double max_degraded_percent = 25.0;
@@ -99,7 +100,7 @@ void run(const RunArgs& a) {
   if (!a.session.empty()) {
     if (io::holdsSession(a.out, a.session))
       throw Error("--out " + a.out + " holds the session's own run: its trajectory and report would be replaced; " +
-                  "localize into another folder");
+                  (a.extend ? "extend into another folder" : "localize into another folder"));
     if (!a.initial_pose.empty()) initial_pose = parseInitialPose(a.initial_pose);
     session = std::make_shared<const Session>(io::readSession(a.session));
   }
@@ -109,7 +110,7 @@ void run(const RunArgs& a) {
   } else {
     cfg = config::loadRigConfig(a.config);
   }
-  if (a.no_loop || session) cfg.mapping.loop_enabled = false;
+  if (a.no_loop || (session && !a.extend)) cfg.mapping.loop_enabled = false;
   if (session) checkRigMatchesSession(cfg, a.session);
   applyCalibrationSource(cfg, a.calib, a.bag, a.out);
   const std::string mode = a.mode.empty() ? cfg.mode : a.mode;
@@ -130,6 +131,7 @@ void run(const RunArgs& a) {
   options.session = session;
   options.session_dir = a.session;
   options.initial_pose = initial_pose;
+  options.extend = a.extend;
   options.stop = &g_stop;
   // A mount `calibration: auto` has just found on the same start needs no second look.
   options.check_mount = cfg.calibration.rfind("auto", 0) != 0;
@@ -143,7 +145,9 @@ void run(const RunArgs& a) {
 
   std::cout << "trajectory: " << a.out << "/trajectory.tum (" << r.trajectory.size() << " poses"
             << (a.session.empty() ? "" : ", in the session's map frame") << ")\n";
-  if (a.session.empty()) std::cout << "map:        " << a.out << "/map.pcd (" << r.map_points << " points)\n";
+  if (a.session.empty() || a.extend)
+    std::cout << "map:        " << a.out << "/map.pcd (" << r.map_points << " points"
+              << (a.extend ? ", the session's grown" : "") << ")\n";
   std::cout << "report:     " << a.out << "/report.json, " << a.out << "/report.md\n\n" << r.timing.table();
   if (r.report.localization.enabled) {
     const pipeline::RunReport::Localization& l = r.report.localization;
@@ -153,6 +157,11 @@ void run(const RunArgs& a) {
           l.first_localized_s, l.keyframes_fitted, l.keyframes, l.lost_s.size(), l.relocalizations);
     else
       std::printf("\nnot localized in the session's map: %s\n", l.last_reason.c_str());
+  }
+  if (r.report.extension.enabled) {
+    const pipeline::RunReport::Extension& x = r.report.extension;
+    std::printf("\nfound in the session %.1f s after the start; %zu keyframes added to its %zu (%s/session)\n",
+                x.localized_at_s, x.keyframes_added, x.session_keyframes, a.out.c_str());
   }
   if (r.report.evaluation) {
     const eval::EvalResult& e = *r.report.evaluation;
@@ -194,6 +203,11 @@ void registerRunCommand(CLI::App& app) {
   cmd->add_option("--duration", args->duration_s, "Stop after this many seconds of the bag");
   cmd->add_flag("--no-progress", args->no_progress, "No progress bar");
   cmd->add_flag("--no-loop", args->no_loop, "Disable loop closure");
+  cmd->add_option("--extend", args->session,
+                  "Session folder of an earlier run (OUT/session) to map on in: the bag is localized in it first, "
+                  "then mapped in its frame; OUT/map.pcd and OUT/session hold both runs")
+      ->check(CLI::ExistingDirectory)
+      ->each([args](const std::string&) { args->extend = true; });
   cmd->add_option("--max-degraded", args->max_degraded_percent,
                   "Exit code 3 (outputs not trustworthy) when more than this % of the sweeps are degraded or the "
                   "poses cover less than 100 - this % of the stream")

@@ -85,6 +85,21 @@ void MappingBackend::finish() {
   judgeSubmaps(true);
 }
 
+bool MappingBackend::mappedBefore(const Eigen::Vector3d& world) const {
+  if (covered_before_.empty()) return false;
+  // The session's surface, placed by a localization a centimetre off, sits in the neighbouring
+  // voxel as often as not: any of the 27 around the point counts.
+  for (int n = 0; n < 27; ++n)
+    if (covered_before_.contains(voxelKeyOf(world, cfg_.map_leaf_m, n % 3 - 1, (n / 3) % 3 - 1, n / 9 - 1)))
+      return true;
+  return false;
+}
+
+void MappingBackend::coverAlready(const std::vector<Eigen::Vector3d>& world_points) {
+  if (!cfg_.dedupe_revisits || cfg_.map_leaf_m <= 0.0) return;
+  for (const Eigen::Vector3d& p : world_points) covered_before_.insert(voxelKeyOf(p, cfg_.map_leaf_m));
+}
+
 void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
   const Eigen::Isometry3d T_world_body = sweep.state.pose();
   newest_ = {sweep.state.stamp_ns, T_world_body};
@@ -197,15 +212,17 @@ void MappingBackend::closeSubmap() {
       // their slots prefetched a block ahead of the inserts, which then wait on fewer cache misses.
       constexpr std::size_t kBlock = 16;
       std::uint64_t keys[kBlock];
+      Eigen::Vector3d world[kBlock];
       std::size_t kept = 0;
       for (std::size_t begin = 0; begin < pts.size(); begin += kBlock) {
         const std::size_t n = std::min(kBlock, pts.size() - begin);
         for (std::size_t j = 0; j < n; ++j) {
-          keys[j] = voxelKeyOf(T_world_keyframe * pts[begin + j].xyz.cast<double>(), leaf);
+          world[j] = T_world_keyframe * pts[begin + j].xyz.cast<double>();
+          keys[j] = voxelKeyOf(world[j], leaf);
           covered.prefetch(keys[j]);
         }
         for (std::size_t j = 0; j < n; ++j)
-          if (covered.insert(keys[j])) pts[kept++] = pts[begin + j];
+          if (!mappedBefore(world[j]) && covered.insert(keys[j])) pts[kept++] = pts[begin + j];
       }
       pts.resize(kept);
     }

@@ -227,6 +227,16 @@ Json toJson(const RunReport& r) {
                            {"last_reason", l.last_reason}};
   }
 
+  if (r.extension.enabled) {
+    const RunReport::Extension& e = r.extension;
+    rep["extension"] = {{"session", e.session},
+                        {"session_keyframes", e.session_keyframes},
+                        {"session_map_points", e.session_map_points},
+                        {"keyframes_added", e.keyframes_added},
+                        {"localized_at_s", e.localized_at_s},
+                        {"T_map_odom", matrixRows(e.T_map_odom)}};
+  }
+
   Json features = Json::object();
   for (const auto& [name, t] : r.features) {
     const double n = static_cast<double>(std::max<std::size_t>(t.sweeps, 1));

@@ -72,6 +72,34 @@ class CreatedFolder {
 /// The mode asked for, else the config's.
 std::string modeOf(const RunOptions& options) { return options.mode.empty() ? options.config.mode : options.mode; }
 
+/// Where the bag's start lies in options.session: its odometry frame in the session's (map <- odom)
+/// and when it found itself (seconds from the first IMU sample). Reads the bag until the
+/// localization finds the rig; throws when it never does.
+std::pair<Eigen::Isometry3d, double> findInSession(const RunOptions& options) {
+  const std::string mode = modeOf(options);
+  io::BagSource source(options.bag_path, config::bagSourceOptions(options.config, mode));
+  System system(options.config, mode);
+  system.localizeIn(options.session, options.session_dir, options.initial_pose);
+  const Stamp stop_ns = options.max_duration_s > 0 ? source.beginNs() + fromSec(options.max_duration_s)
+                                                   : std::numeric_limits<Stamp>::max();
+  io::SensorEvent event;
+  while (!(options.stop && options.stop->load()) && !system.localization()->localized && source.next(&event)) {
+    if (event.kind == io::SensorEvent::Kind::kImu) {
+      if (event.imu.stamp_ns > stop_ns) break;
+      system.addImu(event.imu);
+    } else {
+      system.addScan(std::move(event.scan));
+    }
+  }
+  const backend::LocalizationStatus& status = *system.localization();
+  if (!status.localized)
+    throw Error("not localized in the session's map " + options.session_dir + " (" +
+                (status.last_reason.empty() ? "no keyframe to try" : status.last_reason) +
+                "): nothing to extend; without --extend the bag is mapped as a session of its own");
+  const double at_s = system.report().localization.first_localized_s;
+  return {system.mapFromOdom(), at_s};
+}
+
 RunResult runPass(const RunOptions& options) {
   const config::RigConfig& cfg = options.config;
   CreatedFolder out_folder(options.out_dir,
@@ -81,7 +109,11 @@ RunResult runPass(const RunOptions& options) {
 
   io::BagSource source(options.bag_path, config::bagSourceOptions(cfg, mode));
   System system(cfg, mode);
-  if (options.session) {
+  if (options.session && options.extend) {
+    const auto [T_map_odom, at_s] = findInSession(options);
+    log::emit(log::Level::kInfo, "found in ", options.session_dir, " ", at_s, " s in: mapping on in its frame");
+    system.extend(options.session, options.session_dir, T_map_odom, at_s);
+  } else if (options.session) {
     log::emit(log::Level::kInfo, "localizing in ", options.session_dir, ": ", options.session->keyframes.size(),
               " keyframes, ", options.session->map.size(), " map points");
     system.localizeIn(options.session, options.session_dir, options.initial_pose);
@@ -272,7 +304,8 @@ RunResult runBag(const RunOptions& options) {
     else if (!pass.mount_check->lidar.empty())
       log::info("mount check: ", pass.mount_check->message);
   }
-  const bool rerun = options.config.estimator.online_calibration.rerun && options.replays <= 1 && !options.session;
+  const bool rerun =
+      options.config.estimator.online_calibration.rerun && options.replays <= 1 && (!options.session || options.extend);
   // Passes that may be run again keep their calibration fixed and only estimate it.
   if (rerun) pass.config.estimator.online_calibration.apply = false;
   RunResult result = runPass(pass);

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 
+#include "mmlio/backend/pose_graph.hpp"
 #include "mmlio/core/log.hpp"
 #include "mmlio/core/so3.hpp"
 #include "mmlio/io/pcd_io.hpp"
@@ -17,6 +18,11 @@
 namespace mmlio::pipeline {
 
 namespace {
+
+// How well the localization that places an extending run is known: a verified ICP onto the
+// session's map (its tracking holds its keyframes within about a centimetre).
+constexpr double kExtensionTieSigmaM = 0.01;
+constexpr double kExtensionTieSigmaRad = 0.2 * M_PI / 180.0;
 
 /// The process's resident memory high-water mark so far, MB (0 if unknown).
 double peakRssMb() {
@@ -53,6 +59,65 @@ void System::localizeIn(std::shared_ptr<const Session> session, const std::strin
   session_ = std::move(session);
   session_dir_ = session_dir;
   localizer_ = std::make_unique<backend::MapLocalizer>(*session_, backend::MapLocalizerConfig(), initial_pose);
+}
+
+void System::extend(std::shared_ptr<const Session> session, const std::string& session_dir,
+                    const Eigen::Isometry3d& T_map_odom, double localized_at_s) {
+  session_ = std::move(session);
+  session_dir_ = session_dir;
+  T_map_odom_ = T_map_odom;
+  extension_localized_at_s_ = localized_at_s;
+  const Eigen::Isometry3d T_odom_map = T_map_odom.inverse();
+  std::vector<Eigen::Vector3d> mapped;
+  mapped.reserve(session_->map.size());
+  for (const Point& p : session_->map) mapped.push_back(T_odom_map * p.xyz.cast<double>());
+  mapping_.update([&mapped](backend::MappingBackend& b) { b.coverAlready(mapped); });
+}
+
+Trajectory System::inSession(Trajectory trajectory) const {
+  if (!T_map_odom_) return trajectory;
+  for (StampedPose& p : trajectory) p.T_world_body = *T_map_odom_ * p.T_world_body;
+  return trajectory;
+}
+
+std::vector<Point> System::inSession(std::vector<Point> points) const {
+  if (!T_map_odom_) return points;
+  const Eigen::Isometry3f T = T_map_odom_->cast<float>();
+  for (Point& p : points) p.xyz = T * p.xyz;
+  return points;
+}
+
+Session System::mergedSession(Session added) const {
+  if (!T_map_odom_) return added;
+  Session merged;
+  merged.map_voxel_m = added.map_voxel_m;
+  merged.cloud_voxel_m = added.cloud_voxel_m;
+  merged.keyframes = session_->keyframes;
+  merged.loops = session_->loops;
+  const int first_added = static_cast<int>(merged.keyframes.size());
+  for (SessionKeyframe& k : added.keyframes) {
+    k.T_map_body = *T_map_odom_ * k.T_map_body;
+    merged.keyframes.push_back(std::move(k));
+  }
+  for (SessionLoop l : added.loops) {
+    l.from += first_added;
+    l.to += first_added;
+    merged.loops.push_back(l);
+  }
+  // One graph: the first keyframe added is tied where the localization put it to the session's
+  // keyframe nearest to it.
+  if (first_added > 0 && static_cast<int>(merged.keyframes.size()) > first_added) {
+    const Eigen::Isometry3d& T_new = merged.keyframes[static_cast<std::size_t>(first_added)].T_map_body;
+    int nearest = 0;
+    for (int k = 1; k < first_added; ++k)
+      if ((merged.keyframes[static_cast<std::size_t>(k)].T_map_body.translation() - T_new.translation()).norm() <
+          (merged.keyframes[static_cast<std::size_t>(nearest)].T_map_body.translation() - T_new.translation()).norm())
+        nearest = k;
+    merged.loops.push_back({nearest, first_added,
+                            merged.keyframes[static_cast<std::size_t>(nearest)].T_map_body.inverse() * T_new,
+                            backend::isotropicInformation(kExtensionTieSigmaM, kExtensionTieSigmaRad)});
+  }
+  return merged;
 }
 
 bool System::hintPose(const Eigen::Isometry3d& T_map_body, bool with_height) {
@@ -184,7 +249,8 @@ Trajectory System::inputTime(Trajectory trajectory) const {
 
 Trajectory System::trajectory() const {
   if (localizer_) return inputTime(localizer_->inMap(odometry_poses_.trajectory()));
-  return inputTime(mapping_.read([this](const backend::MappingBackend& b) { return b.corrected(odometry_poses_); }));
+  return inSession(
+      inputTime(mapping_.read([this](const backend::MappingBackend& b) { return b.corrected(odometry_poses_); })));
 }
 
 Trajectory System::route() const {
@@ -194,7 +260,8 @@ Trajectory System::route() const {
   if (!odometry_poses_.empty() && (keyframe_poses_.empty() || keyframe_poses_.back() + 1 != odometry_poses_.size()))
     odometry.push_back(odometry_poses_.back());
   if (localizer_) return inputTime(localizer_->inMap(odometry));
-  return inputTime(mapping_.read([&](const backend::MappingBackend& b) { return b.corrected(std::move(odometry)); }));
+  return inSession(
+      inputTime(mapping_.read([&](const backend::MappingBackend& b) { return b.corrected(std::move(odometry)); })));
 }
 
 Stamp System::externalStamp(Stamp internal_ns) const { return online_.externalStamp(internal_ns); }
@@ -205,7 +272,8 @@ Eigen::Isometry3d System::mapFromOdom() const {
         localizer_->mapFromOdom(odometry_poses_.empty() ? 0 : odometry_poses_.back().stamp_ns);
     return T ? *T : Eigen::Isometry3d::Identity();
   }
-  return mapping_.read([](const backend::MappingBackend& b) { return b.correction(); });
+  const Eigen::Isometry3d correction = mapping_.read([](const backend::MappingBackend& b) { return b.correction(); });
+  return T_map_odom_ ? *T_map_odom_ * correction : correction;
 }
 
 std::size_t System::loops() const {
@@ -214,7 +282,11 @@ std::size_t System::loops() const {
 
 std::vector<Point> System::map() const {
   if (localizer_) return session_->map;
-  return mapping_.read([](const backend::MappingBackend& b) { return b.map(); });
+  std::vector<Point> added = inSession(mapping_.read([](const backend::MappingBackend& b) { return b.map(); }));
+  if (!T_map_odom_) return added;
+  std::vector<Point> merged = session_->map;
+  merged.insert(merged.end(), added.begin(), added.end());
+  return merged;
 }
 
 RunReport System::report(Stamp stream_end_ns, const TrustLimits& limits) const {
@@ -263,6 +335,16 @@ RunReport System::report(Stamp stream_end_ns, const TrustLimits& limits) const {
   r.memory.peak_rss_mb = peakRssMb();
   judgeTrust(&r, online_.internalStamp(end_ns), limits);
   if (localizer_) reportLocalization(&r);
+  if (T_map_odom_) {
+    RunReport::Extension& e = r.extension;
+    e.enabled = true;
+    e.session = session_dir_;
+    e.session_keyframes = session_->keyframes.size();
+    e.session_map_points = session_->map.size();
+    e.keyframes_added = mapping_.read([](const backend::MappingBackend& b) { return b.keyframes(); });
+    e.localized_at_s = extension_localized_at_s_;
+    e.T_map_odom = *T_map_odom_;
+  }
   return r;
 }
 
@@ -345,6 +427,13 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
   if (localizer_) {
     trajectory = this->trajectory();
     map_points = session_->map;  // for the page's 3D view, in the frame of the trajectory
+  } else if (T_map_odom_) {
+    trajectory = inSession(std::move(trajectory));
+    std::vector<Point> added = inSession(std::move(map_points));
+    map_points = session_->map;
+    map_points.insert(map_points.end(), added.begin(), added.end());
+    dynamic_map = inSession(std::move(dynamic_map));
+    for (auto& [lidar, points] : lidar_maps) points = inSession(std::move(points));
   }
   io::writeTum(dir + "trajectory.tum", trajectory);
   io::writeTum(dir + "trajectory_odometry.tum", odometryTrajectory());  // before loop correction
@@ -373,6 +462,7 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
   const std::vector<Point>* page_map = &map_points;
   if (cfg_.output.write_session && !localizer_) {
     for (SessionKeyframe& k : session.keyframes) k.stamp_ns = online_.externalStamp(k.stamp_ns);
+    session = mergedSession(std::move(session));
     session.map = std::move(map_points);  // not copied (a hall's is 80 MB): the page reads it there
     page_map = &session.map;
     out.session = dir + "session";

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <string>
 
+#include "mmlio/core/error.hpp"
 #include "mmlio/io/session_io.hpp"
 #include "mmlio/pipeline/runner.hpp"
 #include "mmlio/sim/simulator.hpp"
@@ -70,13 +71,15 @@ class Localize : public ::testing::Test {
     double ate_m = 0, worst_m = 0;  // in the map frame as it is: no alignment of the localized poses
     int poses = 0;
   };
-  /// The walk `so` localized in the mapping run's session, with no pose given.
-  static Localized localizeWalk(const sim::SimOptions& so, const std::string& name) {
+  /// The walk `so` localized in the mapping run's session, with no pose given (or, extending,
+  /// mapped on in it, loops on).
+  static Localized localizeWalk(const sim::SimOptions& so, const std::string& name, bool extend = false) {
     const sim::Simulator sim(so);
     testing::writeSimBag(sim, dir_ / (name + ".bag"));
     pipeline::RunOptions options;
     options.config = testing::simRigConfig(sim);
-    options.config.mapping.loop_enabled = false;
+    options.config.mapping.loop_enabled = extend;
+    options.extend = extend;
     options.bag_path = dir_ / (name + ".bag");
     options.out_dir = dir_ / (name + "_out");
     options.session_dir = dir_ / "map_out/session";
@@ -144,6 +147,42 @@ TEST_F(Localize, AfterTheFurnitureMovedItStillTracksToCentimetres) {
   EXPECT_LT(l.worst_m, 0.06);
 }
 
+// `mmlio run --extend`: the same hand-held walk mapped on in the robot's session: its poses in the
+// session's frame as localized ones are, and one map and one session of both runs.
+TEST_F(Localize, AWalkThatExtendsASessionMapsInItsFrameAndGrowsItsMapAndSession) {
+  sim::SimOptions so;
+  so.scenario = "office";
+  so.seed = 2;
+  so.handheld = true;
+  so.route_start = 2;
+  so.duration_s = 20;
+  const Localized l = localizeWalk(so, "extend", true);
+  const pipeline::RunReport::Extension& x = l.run.report.extension;
+  ASSERT_TRUE(x.enabled);
+  const Session before = io::readSession(dir_ / "map_out/session");
+  EXPECT_EQ(x.session_keyframes, before.keyframes.size());
+  EXPECT_GT(x.keyframes_added, 5u);
+  EXPECT_LT(x.localized_at_s, 3.0);
+  ASSERT_GT(l.poses, 100);
+  EXPECT_LT(l.ate_m, 0.02);
+  EXPECT_LT(l.worst_m, 0.06);
+
+  const Session merged = io::readSession(dir_ / "extend_out/session");
+  ASSERT_EQ(merged.keyframes.size(), before.keyframes.size() + x.keyframes_added);
+  for (std::size_t k = 0; k < before.keyframes.size(); ++k)
+    EXPECT_TRUE(merged.keyframes[k].T_map_body.isApprox(before.keyframes[k].T_map_body, 1e-12)) << k;
+  // The walk's first keyframe is tied to the session (and its own loops follow the session's).
+  ASSERT_GE(merged.loops.size(), before.loops.size() + 1);
+  EXPECT_TRUE(std::any_of(merged.loops.begin(), merged.loops.end(), [&](const SessionLoop& loop) {
+    return loop.to == static_cast<int>(before.keyframes.size()) &&
+           loop.from < static_cast<int>(before.keyframes.size());
+  }));
+  // The office walked again adds little: what the session holds is not mapped twice.
+  EXPECT_GE(merged.map.size(), before.map.size());
+  EXPECT_LT(merged.map.size(), before.map.size() * 11 / 10);
+  EXPECT_EQ(l.run.report.outputs.map_points, merged.map.size());
+}
+
 TEST_F(Localize, ABagFromAnotherBuildingIsNeverLocalizedAndSaysSo) {
   sim::SimOptions so;
   so.scenario = "hall";
@@ -163,6 +202,16 @@ TEST_F(Localize, ABagFromAnotherBuildingIsNeverLocalizedAndSaysSo) {
   EXPECT_GT(r.report.localization.relocalization_attempts, 0);
   EXPECT_NE(r.untrusted.find("not localized"), std::string::npos) << r.untrusted;
   EXPECT_TRUE(r.trajectory.empty());  // no pose claims to be in the map
+
+  options.extend = true;  // nor does it extend the session
+  options.out_dir = dir_ / "hall_extend_out";
+  try {
+    pipeline::runBag(options);
+    ADD_FAILURE() << "extending a session from another building";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("not localized"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(options.out_dir));
 }
 
 }  // namespace

@@ -43,6 +43,9 @@ class MappingBackend {
 
   /// After the last sweep: a loop check on the last keyframe if it has not had one.
   void finish();
+  /// Surface already mapped (a session this run extends, in this run's world frame): voxels it
+  /// holds are not mapped again, as a revisit's are not.
+  void coverAlready(const std::vector<Eigen::Vector3d>& world_points);
 
   /// The odometry's poses (estimator stamps, as the sweeps carried them) corrected by the loops
   /// closed so far. The log is the caller's: one run keeps its poses once.
@@ -86,6 +89,8 @@ class MappingBackend {
   std::map<std::string, MapAccumulator> open_;
   std::map<std::string, MapAccumulator> emptied_;  // closed accumulators, kept for their storage
   std::map<std::string, FlatKeySet> covered_;      // world voxels held, per LiDAR key
+  FlatKeySet covered_before_;                      // ... and by the session extended
+  bool mappedBefore(const Eigen::Vector3d& world) const;
   void closeSubmap();
   MapAccumulator& openAccumulator(const std::string& key);  // the newest keyframe's, for this LiDAR key
   std::vector<Point> mergedMap(const std::string* only_lidar) const;

@@ -42,6 +42,11 @@ class MappingThread {
     std::lock_guard<std::mutex> lock(backend_mutex_);
     return f(static_cast<const backend::MappingBackend&>(backend_));
   }
+  /// The same to change it (what a run starts from, before its first sweep).
+  template <class F> auto update(F&& f) {
+    std::lock_guard<std::mutex> lock(backend_mutex_);
+    return f(backend_);
+  }
 
  private:
   void run();

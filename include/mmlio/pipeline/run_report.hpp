@@ -114,10 +114,21 @@ struct RunReport {
     std::string last_reason;
   };
 
+  // `mmlio run --extend`: mapping on in a saved session's frame (report.json: extension).
+  struct Extension {
+    bool enabled = false;
+    std::string session;
+    std::size_t session_keyframes = 0, session_map_points = 0;  // as loaded
+    std::size_t keyframes_added = 0;
+    double localized_at_s = -1;  // when the localization that placed this run found it (first IMU sample: 0)
+    Eigen::Isometry3d T_map_odom = Eigen::Isometry3d::Identity();  // this run's odometry frame in the session's
+  };
+
   std::string status = "complete";  // complete | degraded: ... | interrupted | incomplete: <error>
   std::string untrusted;            // empty, or why the outputs should not be trusted (exit code 3)
   Provenance run;
   Localization localization;
+  Extension extension;
   Input input;
   MountCheck mount_check;  // HVI runs from a rig file: the spinning LiDAR's mount on the still start
   imu::ImuInitResult imu_init;

@@ -37,6 +37,9 @@ struct RunOptions {
   std::shared_ptr<const Session> session;  // io::readSession's
   std::string session_dir;                 // where it was read from (the report names it)
   std::optional<Eigen::Isometry3d> initial_pose;
+  // `mmlio run --extend`: with a session, localize the bag's start in it first, then map as
+  // usual in its frame; the map and the session written are the session's grown by this run.
+  bool extend = false;
   // A second pass with the calibration a first one refined (online_calibration.rerun): what the
   // first pass found (the report keeps it), and the outputs are left alone if it is interrupted.
   std::vector<RunReport::RefinedCalibration> first_pass_calibration;

@@ -55,6 +55,12 @@ class System {
   /// initial_pose: T_map_body at the start, roughly, or none.
   void localizeIn(std::shared_ptr<const Session> session, const std::string& session_dir,
                   const std::optional<Eigen::Isometry3d>& initial_pose = std::nullopt);
+  /// Map on in a saved session instead of a new world (before the first sample): this run's
+  /// odometry frame lies at T_map_odom in the session's (found by localizing the bag's start in
+  /// it, localized_at_s in). The trajectory, the map and the session come out in the session's
+  /// frame, the map and the session merged with it; what the session maps is not mapped again.
+  void extend(std::shared_ptr<const Session> session, const std::string& session_dir,
+              const Eigen::Isometry3d& T_map_odom, double localized_at_s);
   /// While localizing: the rig is roughly at T_map_body now (an operator's hint, rviz's "2D Pose
   /// Estimate"), tried at the next keyframe (without height: see MapLocalizer::hint). False when
   /// not localizing.
@@ -67,8 +73,9 @@ class System {
   /// stated in the report; the trajectory and the map so far stay available. Idempotent.
   void finish();
 
-  /// Odometry poses (IMU frame, one per tracked sweep), not corrected by loops.
-  Trajectory odometryTrajectory() const { return inputTime(odometry_poses_.trajectory()); }
+  /// Odometry poses (IMU frame, one per tracked sweep), not corrected by loops (in the session's
+  /// frame when extending one).
+  Trajectory odometryTrajectory() const { return inSession(inputTime(odometry_poses_.trajectory())); }
   std::size_t posesTracked() const { return odometry_poses_.size(); }
   /// The same poses corrected by the loops closed so far.
   Trajectory trajectory() const;
@@ -106,6 +113,11 @@ class System {
   std::vector<RunReport::RefinedCalibration> refinedCalibration() const;
   /// Estimator stamps back in the input's time (they differ after a time-base jump).
   Trajectory inputTime(Trajectory trajectory) const;
+  /// Poses and points of this run's world in the session's frame when extending one (else as given).
+  Trajectory inSession(Trajectory trajectory) const;
+  std::vector<Point> inSession(std::vector<Point> points) const;
+  /// The session extended, then this run's keyframes and loops, in its frame.
+  Session mergedSession(Session added) const;
 
   config::RigConfig cfg_;
   std::string mode_;
@@ -120,7 +132,7 @@ class System {
   RunReport::ImuBias imu_bias_;
   StageStats timing_;
   std::vector<RunReport::SweepSample> timeline_;
-  PoseLog odometry_poses_;  // estimator stamps: the back end corrects them by its keyframes' stamps
+  PoseLog odometry_poses_;                   // estimator stamps: the back end corrects them by its keyframes' stamps
   std::vector<std::size_t> keyframe_poses_;  // indices into odometry_poses_
   Stamp first_imu_ns_ = 0;
   std::vector<RunReport::RefinedCalibration::Sample> calibration_series_;
@@ -132,6 +144,9 @@ class System {
   std::shared_ptr<const Session> session_;
   std::string session_dir_;
   std::unique_ptr<backend::MapLocalizer> localizer_;
+  // Extending: where this run's world lies in the session's, and when that was found.
+  std::optional<Eigen::Isometry3d> T_map_odom_;
+  double extension_localized_at_s_ = -1;
   OnlinePipeline online_;  // last: its callback uses the members above
 };
 
