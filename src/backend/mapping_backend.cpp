@@ -14,6 +14,10 @@ namespace mmlio::backend {
 namespace {
 
 constexpr double kMovedCellM = 0.5;
+// A keyframe placed by a saved session's map (MapLocalizer's tracking: point-to-plane ICP onto it).
+constexpr double kSessionTieSigmaM = 0.003;
+constexpr double kSessionTieSigmaRad = 0.05 * M_PI / 180.0;
+constexpr int kTiesPerSolve = 5;
 // A cell the odometry reported this many moved-in returns in held a mover (a walker leaves dozens);
 // fewer are the odd false detection on a static surface, which must not cost it points.
 constexpr std::uint32_t kMinMoverReturns = 8;
@@ -76,11 +80,24 @@ void MappingBackend::tryLoop(int k) {
   }
 }
 
+void MappingBackend::tieToSession(int k, const Eigen::Isometry3d& T_world_body) {
+  graph_.addPrior(k, T_world_body, isotropicInformation(kSessionTieSigmaM, kSessionTieSigmaRad));
+  // Each tie pulls little: the graph is solved every few of them, not at each.
+  if (++ties_unsolved_ >= kTiesPerSolve) {
+    graph_.optimize();
+    ties_unsolved_ = 0;
+  }
+}
+
 void MappingBackend::finish() {
   // The end of a run is where a loop matters most (a sequence that returns to its start), but it
   // is rarely a multiple of loop_check_every: check the last keyframe once more.
   const int last = static_cast<int>(graph_.size()) - 1;
   if (closer_ && last > 0 && last != last_checked_) tryLoop(last);
+  if (ties_unsolved_ > 0) {
+    graph_.optimize();
+    ties_unsolved_ = 0;
+  }
   closeSubmap();  // the newest keyframe's submap is complete now
   judgeSubmaps(true);
 }
@@ -121,6 +138,7 @@ void MappingBackend::addSweep(const estimator::SweepResult& sweep) {
     submaps_.emplace_back();
     T_world_keyframe_ = T_world_body;
 
+    if (sweep.T_world_body_measured && k > 0) tieToSession(k, *sweep.T_world_body_measured);
     if (closer_ && k > 0 && k % std::max(1, cfg_.loop_check_every) == 0) tryLoop(k);
   }
   if (cfg_.dynamic_map && !sweep.points_dynamic_body.empty()) dynamic_.add(sweep.points_dynamic_body, T_world_body);
@@ -176,7 +194,7 @@ MapAccumulator& MappingBackend::openAccumulator(const std::string& key) {
 }
 
 Trajectory MappingBackend::corrected(const PoseLog& odometry) const {
-  if (graph_.loops() == 0) return odometry.trajectory();
+  if (!corrects()) return odometry.trajectory();
   Trajectory out;
   out.reserve(odometry.size());
   odometry.forEach([&](const StampedPose& p) {
@@ -186,13 +204,13 @@ Trajectory MappingBackend::corrected(const PoseLog& odometry) const {
 }
 
 Trajectory MappingBackend::corrected(Trajectory odometry) const {
-  if (graph_.loops() == 0) return odometry;
+  if (!corrects()) return odometry;
   for (StampedPose& p : odometry) p.T_world_body = graph_.correct(p.stamp_ns, p.T_world_body);
   return odometry;
 }
 
 Eigen::Isometry3d MappingBackend::correction() const {
-  if (graph_.loops() == 0) return Eigen::Isometry3d::Identity();  // (a loop implies newest_ is set)
+  if (!corrects()) return Eigen::Isometry3d::Identity();  // (a loop or a tie implies newest_ is set)
   return graph_.correct(newest_.stamp_ns, newest_.T_world_body) * newest_.T_world_body.inverse();
 }
 

@@ -100,6 +100,32 @@ struct RelativePoseCost {
   Matrix6d S;
 };
 
+/// Absolute-pose residual of a pose against a measurement (same tangent as RelativePoseCost).
+struct PriorCost {
+  PriorCost(const Eigen::Isometry3d& T, const Matrix6d& sqrt_info)
+      : p(T.translation()), q(Eigen::Quaterniond(T.rotation()).normalized()), S(sqrt_info) {}
+
+  template <typename T> bool operator()(const T* x, T* residual) const {
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> p_x(x);
+    const Eigen::Map<const Eigen::Quaternion<T>> q_x(x + 3);
+    const Eigen::Quaternion<T> dq = q.template cast<T>().conjugate() * q_x;
+    Eigen::Matrix<T, 6, 1> r;
+    r.template head<3>() = p_x - p.template cast<T>();
+    r.template tail<3>() = T(2) * dq.vec();
+    Eigen::Map<Eigen::Matrix<T, 6, 1>> out(residual);
+    out = S.template cast<T>() * r;
+    return true;
+  }
+
+  static ceres::CostFunction* Create(const Eigen::Isometry3d& T, const Matrix6d& sqrt_info) {
+    return new ceres::AutoDiffCostFunction<PriorCost, 6, 7>(new PriorCost(T, sqrt_info));
+  }
+
+  Eigen::Vector3d p;
+  Eigen::Quaterniond q;
+  Matrix6d S;
+};
+
 /// Keeps a keyframe's gravity direction (roll, pitch) at its odometry value.
 struct TiltCost {
   TiltCost(const Eigen::Quaterniond& q_world_body_odom, double sigma_rad)
@@ -178,6 +204,14 @@ void PoseGraph::addLoop(int from, int to, const Eigen::Isometry3d& T_from_to, co
   loop_end_[from] = loop_end_[to] = true;
 }
 
+void PoseGraph::addPrior(int k, const Eigen::Isometry3d& T_world_body, const Matrix6d& information) {
+  if (k < 0 || k >= static_cast<int>(nodes_.size()))
+    throw std::invalid_argument("PoseGraph::addPrior: keyframe index out of range");
+  if (folded_[k]) throw std::invalid_argument("PoseGraph::addPrior: a folded keyframe cannot take a prior");
+  priors_.push_back(edge(k, k, T_world_body, information));
+  loop_end_[k] = true;
+}
+
 bool PoseGraph::fold(int i) {
   const int n = static_cast<int>(nodes_.size());
   if (i <= 0 || i >= n - 1 || folded_[i] || loop_end_[i]) return false;
@@ -219,6 +253,9 @@ bool PoseGraph::optimize() {
     problem.AddResidualBlock(RelativePoseCost::Create(e.T_from_to, e.sqrt_information),
                              cfg_.loop_huber > 0 ? new ceres::HuberLoss(cfg_.loop_huber) : nullptr, x[e.from].data(),
                              x[e.to].data());
+  for (const Edge& e : priors_)
+    problem.AddResidualBlock(PriorCost::Create(e.T_from_to, e.sqrt_information),
+                             cfg_.loop_huber > 0 ? new ceres::HuberLoss(cfg_.loop_huber) : nullptr, x[e.from].data());
   if (cfg_.tilt_sigma_rad > 0.0)
     for (std::size_t i = 1; i < nodes_.size(); ++i)
       if (!folded_[i])

@@ -233,6 +233,7 @@ Json toJson(const RunReport& r) {
                         {"session_keyframes", e.session_keyframes},
                         {"session_map_points", e.session_map_points},
                         {"keyframes_added", e.keyframes_added},
+                        {"keyframes_tied", e.keyframes_tied},
                         {"localized_at_s", e.localized_at_s},
                         {"T_map_odom", matrixRows(e.T_map_odom)}};
   }

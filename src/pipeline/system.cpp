@@ -72,6 +72,7 @@ void System::extend(std::shared_ptr<const Session> session, const std::string& s
   mapped.reserve(session_->map.size());
   for (const Point& p : session_->map) mapped.push_back(T_odom_map * p.xyz.cast<double>());
   mapping_.update([&mapped](backend::MappingBackend& b) { b.coverAlready(mapped); });
+  tracker_ = std::make_unique<backend::MapLocalizer>(*session_);
 }
 
 Trajectory System::inSession(Trajectory trajectory) const {
@@ -140,11 +141,16 @@ void System::onSweep(estimator::SweepResult r) {
   trackImuBias(r);
   if (r.keyframe) keyframe_poses_.push_back(odometry_poses_.size());
   odometry_poses_.push_back({r.state.stamp_ns, r.state.pose()});
-  if (localizer_ && r.keyframe && r.status == estimator::SweepResult::Status::kTracking) {
+  if ((localizer_ || tracker_) && r.keyframe && r.status == estimator::SweepResult::Status::kTracking) {
     std::vector<Eigen::Vector3d> cloud;
     cloud.reserve(r.points_body.size());
     for (const Point& p : r.points_body) cloud.emplace_back(p.xyz.cast<double>());
-    localizer_->addKeyframe(r.state.stamp_ns, r.state.pose(), map::voxelCentroids(cloud, session_->cloud_voxel_m));
+    backend::MapLocalizer& l = localizer_ ? *localizer_ : *tracker_;
+    l.addKeyframe(r.state.stamp_ns, r.state.pose(), map::voxelCentroids(cloud, session_->cloud_voxel_m));
+    // Extending: the keyframe the session's map places is tied there in this run's world.
+    if (tracker_)
+      if (const std::optional<Eigen::Isometry3d> T_map_body = tracker_->placed(r.state.stamp_ns, r.state.pose()))
+        r.T_world_body_measured = T_map_odom_->inverse() * *T_map_body;
   }
   degeneracy_.add(r);
   dynamic_.sweeps_judged += r.judged_for_movers;
@@ -341,7 +347,10 @@ RunReport System::report(Stamp stream_end_ns, const TrustLimits& limits) const {
     e.session = session_dir_;
     e.session_keyframes = session_->keyframes.size();
     e.session_map_points = session_->map.size();
-    e.keyframes_added = mapping_.read([](const backend::MappingBackend& b) { return b.keyframes(); });
+    mapping_.read([&e](const backend::MappingBackend& b) {
+      e.keyframes_added = b.keyframes();
+      e.keyframes_tied = b.sessionTies();
+    });
     e.localized_at_s = extension_localized_at_s_;
     e.T_map_odom = *T_map_odom_;
   }

@@ -248,6 +248,27 @@ TEST(PoseGraph, FoldsNeitherTheAnchorNorTheNewestNorALoopsEnd) {
   EXPECT_THROW(graph.addLoop(6, 30, Eigen::Isometry3d::Identity(), Matrix6d::Identity()), std::invalid_argument);
 }
 
+TEST(PoseGraph, PriorsFromAMapPullADriftedSideOntoItAndAreNotFolded) {
+  // The square driven with drift, its third side's keyframes measured where a map places them (the
+  // truth): they end on it, and the keyframes between follow.
+  const auto gt = squareLoop();
+  const auto odom = driftingOdometry(gt, 0.5 * kDeg);
+  PoseGraph graph = buildGraph(odom);
+  for (int k = 20; k <= 30; k += 5)
+    graph.addPrior(k, gt[static_cast<std::size_t>(k)], isotropicInformation(0.003, 0.001));
+  EXPECT_EQ(graph.priors(), 3u);
+  const double before = (graph.pose(25).translation() - gt[25].translation()).norm();
+  ASSERT_TRUE(graph.optimize());
+  const double after = (graph.pose(25).translation() - gt[25].translation()).norm();
+  std::printf("keyframe 25: %.3f m off before, %.4f m after\n", before, after);
+  EXPECT_GT(before, 0.5);
+  EXPECT_LT(after, 0.01);
+  EXPECT_LT((graph.pose(27).translation() - gt[27].translation()).norm(), 0.05);
+  EXPECT_FALSE(graph.fold(25));
+  EXPECT_TRUE(graph.fold(26));
+  EXPECT_THROW(graph.addPrior(26, gt[26], isotropicInformation(0.003, 0.001)), std::invalid_argument);
+}
+
 TEST(PoseGraph, RejectsBadInput) {
   PoseGraph graph;
   KeyframeNode a;

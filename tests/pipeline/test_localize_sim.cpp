@@ -148,7 +148,8 @@ TEST_F(Localize, AfterTheFurnitureMovedItStillTracksToCentimetres) {
 }
 
 // `mmlio run --extend`: the same hand-held walk mapped on in the robot's session: its poses in the
-// session's frame as localized ones are, and one map and one session of both runs.
+// session's frame as localized ones are (its keyframes tied where the session's map places them),
+// and one map and one session of both runs.
 TEST_F(Localize, AWalkThatExtendsASessionMapsInItsFrameAndGrowsItsMapAndSession) {
   sim::SimOptions so;
   so.scenario = "office";
@@ -162,6 +163,7 @@ TEST_F(Localize, AWalkThatExtendsASessionMapsInItsFrameAndGrowsItsMapAndSession)
   const Session before = io::readSession(dir_ / "map_out/session");
   EXPECT_EQ(x.session_keyframes, before.keyframes.size());
   EXPECT_GT(x.keyframes_added, 5u);
+  EXPECT_GT(x.keyframes_tied, 0u);  // placed by the session's map as they were added
   EXPECT_LT(x.localized_at_s, 3.0);
   ASSERT_GT(l.poses, 100);
   EXPECT_LT(l.ate_m, 0.02);

@@ -76,6 +76,12 @@ class MapLocalizer {
   /// map <- odom in force at t: the latest correction at or before t, the first one before it
   /// (the odometry before the first localization is in the same frame). Empty before any.
   std::optional<Eigen::Isometry3d> mapFromOdom(Stamp t_ns) const;
+  /// Where the map placed the keyframe stamped stamp_ns (T_map_body) if it updated map <- odom
+  /// there (found, or tracked well conditioned); none otherwise.
+  std::optional<Eigen::Isometry3d> placed(Stamp stamp_ns, const Eigen::Isometry3d& T_odom_body) const {
+    if (corrections_.empty() || corrections_.back().first != stamp_ns) return std::nullopt;
+    return corrections_.back().second * T_odom_body;
+  }
   /// The odometry's poses in the map frame (poses before the first localization too; none at all
   /// when it never localized).
   Trajectory inMap(const Trajectory& odometry) const;

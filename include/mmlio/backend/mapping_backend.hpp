@@ -71,11 +71,18 @@ class MappingBackend {
   /// caller has it from map(), which costs an assembly).
   Session session() const;
   std::size_t keyframes() const;
+  /// Keyframes tied to the extended session's map.
+  std::size_t sessionTies() const { return graph_.priors(); }
   std::size_t loops() const;
   LoopFigures loopFigures() const;
 
  private:
   bool plausibleCorrection(const backend::LoopResult& r) const;
+  /// Keyframe k where the extended session's map places it (see SweepResult::T_world_body_measured).
+  void tieToSession(int k, const Eigen::Isometry3d& T_world_body);
+  int ties_unsolved_ = 0;
+  /// Whether the graph moves the odometry's poses (a loop closed, or keyframes tied to a session).
+  bool corrects() const { return graph_.loops() > 0 || graph_.priors() > 0; }
   void tryLoop(int keyframe);
 
   Config cfg_;

@@ -59,6 +59,11 @@ class PoseGraph {
   /// Loop edge: T_from_to maps `to`'s body frame into `from`'s; information in (dp, dtheta) order.
   /// Neither end may be folded.
   void addLoop(int from, int to, const Eigen::Isometry3d& T_from_to, const Matrix6d& information);
+  /// Prior on keyframe k's pose: measured at T_world_body with this information ((dp, dtheta),
+  /// dtheta on the right), robust like a loop. For a run that extends a saved map: where that map
+  /// places the keyframe. The keyframe is not folded after.
+  void addPrior(int k, const Eigen::Isometry3d& T_world_body, const Matrix6d& information);
+  std::size_t priors() const { return priors_.size(); }
   /// Takes keyframe i out of the optimised problem: its two odometry edges become one between its
   /// neighbours in the problem (the steps' noise adding up), and from then on its pose follows
   /// theirs, its correction interpolated between theirs by the distance travelled. For keyframes
@@ -116,6 +121,7 @@ class PoseGraph {
   std::vector<std::array<double, 7>> params_;  // {px,py,pz,qx,qy,qz,qw} per keyframe
   std::vector<Edge> odom_edges_;               // between kept keyframes, in order
   std::vector<Edge> loops_;
+  std::vector<Edge> priors_;  // from == to == the keyframe, T_from_to its measured pose
   std::vector<bool> folded_;
   std::vector<bool> loop_end_;  // a loop edge starts or ends here
   std::size_t folded_count_ = 0;

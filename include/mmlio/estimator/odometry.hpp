@@ -11,6 +11,7 @@
 
 #include <deque>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -109,7 +110,10 @@ struct SweepResult {
   // and carved local-map points. The map's ghost removal judges only near these.
   std::vector<Eigen::Vector3d> moved_world;
   std::shared_ptr<const SweepView> view;  // what each LiDAR saw, placed at the final state (dynamic.enabled)
-  std::string note;                       // why degraded
+  // Extending a saved session: where its map places this keyframe (the world frame's pose), for the
+  // mapping back end to tie it there. Set after the odometry, by the run that tracks the session.
+  std::optional<Eigen::Isometry3d> T_world_body_measured;
+  std::string note;  // why degraded
   StageTimes times_ms;
 };
 

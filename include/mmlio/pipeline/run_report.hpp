@@ -120,7 +120,8 @@ struct RunReport {
     std::string session;
     std::size_t session_keyframes = 0, session_map_points = 0;  // as loaded
     std::size_t keyframes_added = 0;
-    double localized_at_s = -1;  // when the localization that placed this run found it (first IMU sample: 0)
+    std::size_t keyframes_tied = 0;  // ... placed by the session's map (tracked onto it) and tied there
+    double localized_at_s = -1;      // when the localization that placed this run found it (first IMU sample: 0)
     Eigen::Isometry3d T_map_odom = Eigen::Isometry3d::Identity();  // this run's odometry frame in the session's
   };
 

@@ -144,8 +144,10 @@ class System {
   std::shared_ptr<const Session> session_;
   std::string session_dir_;
   std::unique_ptr<backend::MapLocalizer> localizer_;
-  // Extending: where this run's world lies in the session's, and when that was found.
+  // Extending: where this run's world lies in the session's, and when that was found; the
+  // session's map tracked as localization does, to tie the keyframes it places.
   std::optional<Eigen::Isometry3d> T_map_odom_;
+  std::unique_ptr<backend::MapLocalizer> tracker_;
   double extension_localized_at_s_ = -1;
   OnlinePipeline online_;  // last: its callback uses the members above
 };
