@@ -17,6 +17,7 @@
 #include "mmlio/config/rig_config.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/timer.hpp"
+#include "mmlio/io/session_io.hpp"
 #include "mmlio/pipeline/runner.hpp"
 
 namespace mmlio::apps {
@@ -24,6 +25,7 @@ namespace {
 
 struct BenchArgs {
   std::string bag, config, mode, calib, curve;
+  std::string session;  // localize in it instead of mapping (what a robot on yesterday's map costs)
   int repeat = 1;
   int replays = 1;
 };
@@ -76,6 +78,11 @@ void bench(const BenchArgs& a) {
   options.mode = a.mode;
   options.progress = false;
   options.replays = a.replays;
+  if (!a.session.empty()) {
+    options.session = std::make_shared<const Session>(io::readSession(a.session));
+    options.session_dir = a.session;
+    options.config.mapping.loop_enabled = false;  // as mmlio localize
+  }
   std::ofstream curve;                    // every sweep's bag time, wall time, ms and resident MB, written as it comes
   const auto startCurve = [&curve, &a] {  // (re)started: it holds the last repeat
     curve.close();
@@ -146,6 +153,9 @@ void registerBenchCommand(CLI::App& app) {
   cmd->add_option("--curve", args->curve,
                   "Write every sweep's bag time, wall time, ms (sweep loop) and resident MB to this CSV "
                   "(scripts/plot_bench_curve.py draws it)");
+  cmd->add_option("--session", args->session,
+                  "Localize in this session (OUT/session of a run) instead of mapping, as mmlio localize does")
+      ->check(CLI::ExistingDirectory);
   cmd->add_option("--repeat", args->repeat, "Passes over the bag (memory must stay flat)")->check(CLI::PositiveNumber);
   cmd->callback([args] { bench(*args); });
 }
