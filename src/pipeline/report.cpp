@@ -61,7 +61,7 @@ void writeReports(const std::string& dir, RunReport& report, const Trajectory& t
   const std::string title =
       report.input.source.empty() ? "run" : std::filesystem::path(report.input.source).filename().string();
   io::writeFileAtomically(dir + "report.html", [&](std::ostream& os) {
-    os << toHtml(report, trajectory, map_world, loadHtmlScripts(), title);
+    writeHtml(os, report, trajectory, map_world, loadHtmlScripts(), title);
   });
 }
 

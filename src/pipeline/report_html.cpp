@@ -103,13 +103,17 @@ template <typename T> void append(std::vector<std::uint8_t>* out, const T& value
   out->insert(out->end(), p, p + sizeof(T));
 }
 
-std::string view3dHtml(const RunReport& r, const Trajectory& trajectory, const std::vector<Point>& map_world,
-                       const HtmlScripts& scripts, const HtmlReportLimits& limits) {
+/// The map section, its points streamed as base64 (the largest part of the page: written as it is
+/// encoded, never held as text).
+void writeView3d(std::ostream& os, const RunReport& r, const Trajectory& trajectory,
+                 const std::vector<Point>& map_world, const HtmlScripts& scripts, const HtmlReportLimits& limits) {
   std::string html = "<section><h2>Map</h2><div id=\"view3d\">";
-  if (!scripts.available())
-    return html +
-           "<div class=\"missing\">The 3D view needs three.js: <code>apt-get install libjs-three</code> (or point "
-           "MMLIO_JS_DIR at a folder holding three/three.min.js), then run again.</div></div></section>\n";
+  if (!scripts.available()) {
+    os << html
+       << "<div class=\"missing\">The 3D view needs three.js: <code>apt-get install libjs-three</code> (or point "
+          "MMLIO_JS_DIR at a folder holding three/three.min.js), then run again.</div></div></section>\n";
+    return;
+  }
   const std::size_t stride = std::max<std::size_t>(
       1, (map_world.size() + limits.max_map_points - 1) / std::max<std::size_t>(1, limits.max_map_points));
   // Coordinates relative to the trajectory's start: float32 keeps millimetres within kilometres.
@@ -179,9 +183,11 @@ std::string view3dHtml(const RunReport& r, const Trajectory& trajectory, const s
       "<div class=\"hint\">drag: orbit, right-drag: pan, wheel: zoom &middot; " +
       std::to_string(points.size()) + " of " + std::to_string(map_world.size()) + " map points</div></div>";
   html += "<script type=\"application/json\" id=\"view3d-meta\">" + std::string(meta) + "</script>\n";
-  html += "<script type=\"application/octet-stream\" id=\"view3d-data\">" + base64(data.data(), data.size()) +
-          "</script>\n</section>\n";
-  return html;
+  os << html << "<script type=\"application/octet-stream\" id=\"view3d-data\">";
+  constexpr std::size_t kChunk = std::size_t{3} * 16384;  // a multiple of 3: no padding inside the stream
+  for (std::size_t i = 0; i < data.size(); i += kChunk)
+    os << base64(data.data() + i, std::min(kChunk, data.size() - i));
+  os << "</script>\n</section>\n";
 }
 
 // ---- plots ----
@@ -420,31 +426,40 @@ std::string base64(const std::uint8_t* data, std::size_t size) {
   return out;
 }
 
+void writeHtml(std::ostream& os, const RunReport& report, const Trajectory& trajectory,
+               const std::vector<Point>& map_world, const HtmlScripts& scripts, const std::string& title,
+               const HtmlReportLimits& limits) {
+  // Written section by section: an autosaving node's page is tens of MB, and held whole (plus the
+  // copies its concatenation makes) it was the run's peak memory.
+  os << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n"
+        // Nothing outside this file may load: the page works offline and leaks nothing.
+        "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; script-src 'unsafe-inline'; "
+        "style-src 'unsafe-inline'; img-src data:\">\n"
+        "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>mmlio: "
+     << xmlEscape(title) << "</title>\n<style>" << kReportCss
+     << "</style>\n<script>window.mmlioBlocked = 0; document.addEventListener('securitypolicyviolation', function () {"
+        " window.mmlioBlocked += 1; document.body.dataset.blocked = String(window.mmlioBlocked); });</script>\n"
+        "</head><body><main>\n";
+  os << headerHtml(report, title);
+  os << cardsHtml(summaryCards(report, trajectory));
+  writeView3d(os, report, trajectory, map_world, scripts, limits);
+  os << plotsHtml(report, trajectory, map_world, limits);
+  os << startupHtml(report);
+  os << detailsHtml(toJson(report));
+  os << "<footer>Written by mmlio " << xmlEscape(report.run.mmlio_version)
+     << ". Self-contained: the map, plots and scripts are inside this file.</footer>\n</main>\n";
+  if (scripts.available()) {
+    os << "<script>" << scripts.three << "</script>\n<script>" << scripts.orbit_controls << "</script>\n";
+    os << "<script>" << kView3dJs << "</script>\n";
+  }
+  os << "</body></html>\n";
+}
+
 std::string toHtml(const RunReport& report, const Trajectory& trajectory, const std::vector<Point>& map_world,
                    const HtmlScripts& scripts, const std::string& title, const HtmlReportLimits& limits) {
-  std::string html =
-      "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n"
-      // Nothing outside this file may load: the page works offline and leaks nothing.
-      "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; script-src 'unsafe-inline'; "
-      "style-src 'unsafe-inline'; img-src data:\">\n"
-      "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>mmlio: " +
-      xmlEscape(title) + "</title>\n<style>" + kReportCss +
-      "</style>\n<script>window.mmlioBlocked = 0; document.addEventListener('securitypolicyviolation', function () {"
-      " window.mmlioBlocked += 1; document.body.dataset.blocked = String(window.mmlioBlocked); });</script>\n"
-      "</head><body><main>\n";
-  html += headerHtml(report, title);
-  html += cardsHtml(summaryCards(report, trajectory));
-  html += view3dHtml(report, trajectory, map_world, scripts, limits);
-  html += plotsHtml(report, trajectory, map_world, limits);
-  html += startupHtml(report);
-  html += detailsHtml(toJson(report));
-  html += "<footer>Written by mmlio " + xmlEscape(report.run.mmlio_version) +
-          ". Self-contained: the map, plots and scripts are inside this file.</footer>\n</main>\n";
-  if (scripts.available()) {
-    html += "<script>" + scripts.three + "</script>\n<script>" + scripts.orbit_controls + "</script>\n";
-    html += "<script>" + std::string(kView3dJs) + "</script>\n";
-  }
-  return html + "</body></html>\n";
+  std::ostringstream os;
+  writeHtml(os, report, trajectory, map_world, scripts, title, limits);
+  return os.str();
 }
 
 }  // namespace mmlio::pipeline

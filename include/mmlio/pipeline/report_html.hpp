@@ -3,6 +3,7 @@
 // trust, ATE, loops, what was degenerate or dropped), then an interactive 3D view of the map with
 // the trajectory, keyframes and loop edges (three.js, inlined), the plots as SVG, and every field
 // of report.json collapsed below. A Content-Security-Policy forbids any request outside the file.
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -23,7 +24,11 @@ struct HtmlReportLimits {
   double slice_half_height_m = 0.8;     // the top view's map slice around the trajectory's height
 };
 
-/// The page. `title` names the run (the bag's file name).
+/// The page, written to `os` as it is made. `title` names the run (the bag's file name).
+void writeHtml(std::ostream& os, const RunReport& report, const Trajectory& trajectory,
+               const std::vector<Point>& map_world, const HtmlScripts& scripts, const std::string& title,
+               const HtmlReportLimits& limits = {});
+/// The same as one string (tests).
 std::string toHtml(const RunReport& report, const Trajectory& trajectory, const std::vector<Point>& map_world,
                    const HtmlScripts& scripts, const std::string& title, const HtmlReportLimits& limits = {});
 
