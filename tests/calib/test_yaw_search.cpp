@@ -55,6 +55,12 @@ Views viewsFrom(const Scene& scene, const Eigen::Isometry3d& T_world_solid, cons
   return v;
 }
 
+void printFinalists(const SpatialCalibrationResult& r) {
+  std::printf("%s\n", r.message.c_str());
+  for (const MountCandidate& c : r.candidates)
+    std::printf("  yaw %.1f: %d of %d, seen through %.3f\n", c.yaw_deg, c.inliers, c.points_in_view, c.seen_through);
+}
+
 TEST(YawSearch, RefusesARoomThatLooksTheSameAQuarterTurnRound) {
   // The rig low enough for the floor to be in view (it holds the height). The spinning LiDAR right
   // above the solid-state one, both on the room's axis of symmetry: every
@@ -62,9 +68,7 @@ TEST(YawSearch, RefusesARoomThatLooksTheSameAQuarterTurnRound) {
   const Eigen::Isometry3d truth = pose(0, 0, 0.15, 100 * kDeg);
   const Views v = viewsFrom(fourFoldRoom(), pose(0, 0, 0.6, 0), truth);
   const SpatialCalibrationResult r = calibrateSpinningToSolid(v.spinning, v.solid, std::nullopt);
-  std::printf("%s\n", r.message.c_str());
-  for (const MountCandidate& c : r.candidates)
-    std::printf("  yaw %.1f: %d of %d, seen through %.3f\n", c.yaw_deg, c.inliers, c.points_in_view, c.seen_through);
+  printFinalists(r);
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.message.find("about equally"), std::string::npos) << r.message;
 }
@@ -78,9 +82,7 @@ TEST(YawSearch, FindsTheMountOnceTheSymmetryIsBroken) {
   const Eigen::Isometry3d truth = pose(0, 0, 0.15, 100 * kDeg);
   const Views v = viewsFrom(scene, pose(0, 0, 0.6, 0), truth);
   const SpatialCalibrationResult r = calibrateSpinningToSolid(v.spinning, v.solid, std::nullopt);
-  std::printf("%s\n", r.message.c_str());
-  for (const MountCandidate& c : r.candidates)
-    std::printf("  yaw %.1f: %d of %d, seen through %.3f\n", c.yaw_deg, c.inliers, c.points_in_view, c.seen_through);
+  printFinalists(r);
   ASSERT_TRUE(r.ok) << r.message;
   const Eigen::Isometry3d err = truth.inverse() * r.T_solid_spinning;
   EXPECT_LT(err.translation().norm(), 0.01);
@@ -108,9 +110,7 @@ TEST(YawSearch, WhatTheStartCannotTellTheRoomAroundDoes) {
     around.frames.push_back({T_start_solid, xyz(solidFrame(scene, start * T_start_solid, 40 + k, 0.005))});
   }
   const SpatialCalibrationResult r = calibrateSpinningToSolid(v.spinning, around, std::nullopt);
-  std::printf("%s\n", r.message.c_str());
-  for (const MountCandidate& c : r.candidates)
-    std::printf("  yaw %.1f: %d of %d, seen through %.3f\n", c.yaw_deg, c.inliers, c.points_in_view, c.seen_through);
+  printFinalists(r);
   ASSERT_TRUE(r.ok) << r.message;
   const Eigen::Isometry3d err = truth.inverse() * r.T_solid_spinning;
   EXPECT_LT(err.translation().norm(), 0.01);

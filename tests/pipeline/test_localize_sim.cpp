@@ -109,15 +109,21 @@ class Localize : public ::testing::Test {
   static inline std::unique_ptr<pipeline::RunResult> mapping_;
 };
 
-// Started at the office's far end facing back (the mapping walk started at the other end), with no pose.
-TEST_F(Localize, AHandHeldWalkFromTheFarEndFindsItselfInARobotsMapAndTracksToCentimetres) {
+/// The office carried by hand for 20 s from its far end facing back (the mapping walk started at
+/// the other end).
+sim::SimOptions farEndWalk() {
   sim::SimOptions so;
   so.scenario = "office";
   so.seed = 2;
   so.handheld = true;
   so.route_start = 2;
   so.duration_s = 20;
-  const Localized l = localizeWalk(so, "walk");
+  return so;
+}
+
+// Started at the office's far end facing back (the mapping walk started at the other end), with no pose.
+TEST_F(Localize, AHandHeldWalkFromTheFarEndFindsItselfInARobotsMapAndTracksToCentimetres) {
+  const Localized l = localizeWalk(farEndWalk(), "walk");
   const pipeline::RunReport::Localization& report = l.run.report.localization;
   ASSERT_TRUE(report.enabled);
   ASSERT_TRUE(report.localized) << report.last_reason;
@@ -151,13 +157,7 @@ TEST_F(Localize, AfterTheFurnitureMovedItStillTracksToCentimetres) {
 // session's frame as localized ones are (its keyframes tied where the session's map places them),
 // and one map and one session of both runs.
 TEST_F(Localize, AWalkThatExtendsASessionMapsInItsFrameAndGrowsItsMapAndSession) {
-  sim::SimOptions so;
-  so.scenario = "office";
-  so.seed = 2;
-  so.handheld = true;
-  so.route_start = 2;
-  so.duration_s = 20;
-  const Localized l = localizeWalk(so, "extend", true);
+  const Localized l = localizeWalk(farEndWalk(), "extend", true);
   const pipeline::RunReport::Extension& x = l.run.report.extension;
   ASSERT_TRUE(x.enabled);
   const Session before = io::readSession(dir_ / "map_out/session");
