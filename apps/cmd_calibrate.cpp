@@ -43,6 +43,11 @@ void printCalibration(const pipeline::BagCalibrationResult& r) {
               r.spinning.c_str(), T.translation().x(), T.translation().y(), T.translation().z(), ypr.x(), ypr.y(),
               ypr.z());
   std::printf("  %s\n", r.spatial.message.c_str());
+  if (r.from_motion)
+    std::printf(
+        "  the still start could not tell the mount: found on the solid-state LiDAR's map of the first seconds, "
+        "to centimetres and tenths of a degree; mmlio run refines it (online_calibration) and writes "
+        "calibration_refined.yaml\n");
   if (r.temporal.ok)
     std::printf("  clock offset %.2f +- %.2f ms (t_imu = t_stamp + offset)%s%s\n", 1e3 * r.temporal.offset_s,
                 1e3 * r.temporal.sigma_s,
