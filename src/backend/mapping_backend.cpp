@@ -112,9 +112,10 @@ bool MappingBackend::mappedBefore(const Eigen::Vector3d& world) const {
   return false;
 }
 
-void MappingBackend::coverAlready(const std::vector<Eigen::Vector3d>& world_points) {
+void MappingBackend::coverAlready(const std::vector<Point>& points, const Eigen::Isometry3d& T_world_points) {
   if (!cfg_.dedupe_revisits || cfg_.map_leaf_m <= 0.0) return;
-  for (const Eigen::Vector3d& p : world_points) covered_before_.insert(voxelKeyOf(p, cfg_.map_leaf_m));
+  for (const Point& p : points)
+    covered_before_.insert(voxelKeyOf(T_world_points * p.xyz.cast<double>(), cfg_.map_leaf_m));
 }
 
 void MappingBackend::addSweep(const estimator::SweepResult& sweep) {

@@ -251,6 +251,7 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
     frames.push_back({f.T_start_sensor,
                       map::voxelCentroids(inRange(f.returns, cfg.min_range_m, cfg.max_range_m), cfg.target_voxel_m)});
   std::vector<Eigen::Vector3d> solid;
+  // The still start alone is its own cloud (already thinned; thinning it again would reorder it).
   if (frames.size() == 1 && frames[0].T_start_sensor.isApprox(Eigen::Isometry3d::Identity())) {
     solid = frames[0].returns;
   } else {

@@ -213,6 +213,58 @@ calib::SolidView solidViewFromMotion(const std::string& bag_path, const config::
   return view;
 }
 
+/// The mount check's verdict on GICP run from the given mount (no search) on what `where` names.
+MountCheck judgeMount(const calib::SpatialCalibrationResult& r, const Eigen::Isometry3d& given,
+                      const std::string& spinning, const std::string& where, const BagCalibrationOptions& opt,
+                      bool judge_move = true) {
+  MountCheck check;
+  check.lidar = spinning;
+  // Moved along what the view constrains: a start facing a hall's wall leaves GICP free to slide
+  // a right mount along it by decimetres.
+  const Eigen::Vector3d shift = r.T_solid_spinning.translation() - given.translation();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(r.hessian.topLeftCorner<3, 3>());
+  for (int i = 0; i < 3; ++i)
+    if (es.eigenvalues()(i) >= kMountCheckConstrained * es.eigenvalues()(2))
+      check.moved_m = std::hypot(check.moved_m, es.eigenvectors().col(i).dot(shift));
+  check.moved_deg = Eigen::AngleAxisd((given.inverse() * r.T_solid_spinning).rotation()).angle() * 180.0 / M_PI;
+  check.seen_through = r.seen_through;
+  check.overlap = r.overlap;
+  using Refusal = calib::SpatialCalibrationResult::Refusal;
+  // GICP's strict convergence test fails on correspondences flickering at the fine gate too: the
+  // clouds' agreement decides then.
+  const bool clouds_agree = calib::cloudsAgree(r.fitness_m, r.overlap, r.seen_through, opt.spatial);
+  switch (r.refusal) {
+    case Refusal::kTooFewPoints:
+    case Refusal::kNoOverlap:
+    case Refusal::kDegenerate:
+    case Refusal::kAmbiguous:
+      check.message = "not checked: " + r.message;
+      return check;
+    case Refusal::kNotConverged:
+      if (clouds_agree) break;
+      [[fallthrough]];
+    case Refusal::kSeenThrough:
+    case Refusal::kDisagree:
+      check.checked = true;
+      check.agrees = false;
+      check.message = "the clouds of " + where + " contradict the mount given for '" + spinning + "' (overlap " +
+                      fmt(r.overlap, 3) + ", fitness " + fmt(r.fitness_m, 3) + " m, " + fmt(100 * r.seen_through, 2) +
+                      " % of its points where the solid-state LiDAR sees through)";
+      return check;
+    case Refusal::kNone:
+      break;
+  }
+  check.checked = true;
+  // What GICP moves a right mount by is the calibration's error, a few millimetres and hundredths
+  // of a degree; a rig file's rough mount a few centimetres and degrees (online refinement's job).
+  check.agrees = (!judge_move || check.moved_m <= kMountCheckMaxMoveM) && check.moved_deg <= kMountCheckMaxTurnDeg;
+  check.message = check.agrees ? "the clouds of " + where + " agree with the mount given for '" + spinning + "' (" +
+                                     fixed(1e3 * check.moved_m, 1) + " mm, " + fixed(check.moved_deg, 3) + " deg)"
+                               : "the clouds of " + where + " put '" + spinning + "' " + fixed(1e2 * check.moved_m, 1) +
+                                     " cm and " + fixed(check.moved_deg, 1) + " deg from the mount given";
+  return check;
+}
+
 }  // namespace
 
 BagCalibrationResult calibrateBag(const std::string& bag_path, const config::RigConfig& cfg_in,
@@ -312,62 +364,6 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
   res.report = j;
   return res;
 }
-
-namespace {
-
-/// The mount check's verdict on GICP run from the given mount (no search) on what `where` names.
-MountCheck judgeMount(const calib::SpatialCalibrationResult& r, const Eigen::Isometry3d& given,
-                      const std::string& spinning, const std::string& where, const BagCalibrationOptions& opt,
-                      bool judge_move = true) {
-  MountCheck check;
-  check.lidar = spinning;
-  // Moved along what the view constrains: a start facing a hall's wall leaves GICP free to slide
-  // a right mount along it by decimetres.
-  const Eigen::Vector3d shift = r.T_solid_spinning.translation() - given.translation();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(r.hessian.topLeftCorner<3, 3>());
-  for (int i = 0; i < 3; ++i)
-    if (es.eigenvalues()(i) >= kMountCheckConstrained * es.eigenvalues()(2))
-      check.moved_m = std::hypot(check.moved_m, es.eigenvectors().col(i).dot(shift));
-  check.moved_deg = Eigen::AngleAxisd((given.inverse() * r.T_solid_spinning).rotation()).angle() * 180.0 / M_PI;
-  check.seen_through = r.seen_through;
-  check.overlap = r.overlap;
-  using Refusal = calib::SpatialCalibrationResult::Refusal;
-  // GICP's strict convergence test fails on correspondences flickering at the fine gate too: the
-  // clouds' agreement decides then.
-  const bool clouds_agree = calib::cloudsAgree(r.fitness_m, r.overlap, r.seen_through, opt.spatial);
-  switch (r.refusal) {
-    case Refusal::kTooFewPoints:
-    case Refusal::kNoOverlap:
-    case Refusal::kDegenerate:
-    case Refusal::kAmbiguous:
-      check.message = "not checked: " + r.message;
-      return check;
-    case Refusal::kNotConverged:
-      if (clouds_agree) break;
-      [[fallthrough]];
-    case Refusal::kSeenThrough:
-    case Refusal::kDisagree:
-      check.checked = true;
-      check.agrees = false;
-      check.message = "the clouds of " + where + " contradict the mount given for '" + spinning + "' (overlap " +
-                      fmt(r.overlap, 3) + ", fitness " + fmt(r.fitness_m, 3) + " m, " + fmt(100 * r.seen_through, 2) +
-                      " % of its points where the solid-state LiDAR sees through)";
-      return check;
-    case Refusal::kNone:
-      break;
-  }
-  check.checked = true;
-  // What GICP moves a right mount by is the calibration's error, a few millimetres and hundredths
-  // of a degree; a rig file's rough mount a few centimetres and degrees (online refinement's job).
-  check.agrees = (!judge_move || check.moved_m <= kMountCheckMaxMoveM) && check.moved_deg <= kMountCheckMaxTurnDeg;
-  check.message = check.agrees ? "the clouds of " + where + " agree with the mount given for '" + spinning + "' (" +
-                                     fixed(1e3 * check.moved_m, 1) + " mm, " + fixed(check.moved_deg, 3) + " deg)"
-                               : "the clouds of " + where + " put '" + spinning + "' " + fixed(1e2 * check.moved_m, 1) +
-                                     " cm and " + fixed(check.moved_deg, 1) + " deg from the mount given";
-  return check;
-}
-
-}  // namespace
 
 MountCheck checkMountAtStart(const std::string& bag_path, const config::RigConfig& cfg) {
   MountCheck check;

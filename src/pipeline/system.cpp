@@ -67,11 +67,7 @@ void System::extend(std::shared_ptr<const Session> session, const std::string& s
   session_dir_ = session_dir;
   T_map_odom_ = T_map_odom;
   extension_localized_at_s_ = localized_at_s;
-  const Eigen::Isometry3d T_odom_map = T_map_odom.inverse();
-  std::vector<Eigen::Vector3d> mapped;
-  mapped.reserve(session_->map.size());
-  for (const Point& p : session_->map) mapped.push_back(T_odom_map * p.xyz.cast<double>());
-  mapping_.update([&mapped](backend::MappingBackend& b) { b.coverAlready(mapped); });
+  mapping_.update([this](backend::MappingBackend& b) { b.coverAlready(session_->map, T_map_odom_->inverse()); });
   tracker_ = std::make_unique<backend::MapLocalizer>(*session_);
 }
 
@@ -288,7 +284,11 @@ std::size_t System::loops() const {
 
 std::vector<Point> System::map() const {
   if (localizer_) return session_->map;
-  std::vector<Point> added = inSession(mapping_.read([](const backend::MappingBackend& b) { return b.map(); }));
+  return withSessionMap(mapping_.read([](const backend::MappingBackend& b) { return b.map(); }));
+}
+
+std::vector<Point> System::withSessionMap(std::vector<Point> added) const {
+  added = inSession(std::move(added));
   if (!T_map_odom_) return added;
   std::vector<Point> merged = session_->map;
   merged.insert(merged.end(), added.begin(), added.end());
@@ -438,9 +438,7 @@ RunReport System::writeOutputs(const std::string& dir_path, RunReport report, co
     map_points = session_->map;  // for the page's 3D view, in the frame of the trajectory
   } else if (T_map_odom_) {
     trajectory = inSession(std::move(trajectory));
-    std::vector<Point> added = inSession(std::move(map_points));
-    map_points = session_->map;
-    map_points.insert(map_points.end(), added.begin(), added.end());
+    map_points = withSessionMap(std::move(map_points));
     dynamic_map = inSession(std::move(dynamic_map));
     for (auto& [lidar, points] : lidar_maps) points = inSession(std::move(points));
   }

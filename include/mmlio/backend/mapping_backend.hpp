@@ -43,9 +43,9 @@ class MappingBackend {
 
   /// After the last sweep: a loop check on the last keyframe if it has not had one.
   void finish();
-  /// Surface already mapped (a session this run extends, in this run's world frame): voxels it
-  /// holds are not mapped again, as a revisit's are not.
-  void coverAlready(const std::vector<Eigen::Vector3d>& world_points);
+  /// Surface already mapped (a session this run extends; T_world_points brings its points into this
+  /// run's world frame): voxels it holds are not mapped again, as a revisit's are not.
+  void coverAlready(const std::vector<Point>& points, const Eigen::Isometry3d& T_world_points);
 
   /// The odometry's poses (estimator stamps, as the sweeps carried them) corrected by the loops
   /// closed so far. The log is the caller's: one run keeps its poses once.

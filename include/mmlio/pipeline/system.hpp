@@ -116,6 +116,8 @@ class System {
   /// Poses and points of this run's world in the session's frame when extending one (else as given).
   Trajectory inSession(Trajectory trajectory) const;
   std::vector<Point> inSession(std::vector<Point> points) const;
+  /// This run's map points in the session's frame after the session's own (as they are otherwise).
+  std::vector<Point> withSessionMap(std::vector<Point> added) const;
   /// The session extended, then this run's keyframes and loops, in its frame.
   Session mergedSession(Session added) const;
 
