@@ -42,11 +42,15 @@ void printCalibration(const pipeline::BagCalibrationResult& r) {
   std::printf("%s -> IMU: translation (%.4f, %.4f, %.4f) m, yaw/pitch/roll (%.3f, %.3f, %.3f) deg\n",
               r.spinning.c_str(), T.translation().x(), T.translation().y(), T.translation().z(), ypr.x(), ypr.y(),
               ypr.z());
+  const Eigen::Vector3d ts = 1e3 * r.translation_sigma_m, rs = r.rotation_sigma_rad * (180.0 / M_PI);
+  std::printf("  +- (%.1f, %.1f, %.1f) mm, (%.3f, %.3f, %.3f) deg about the IMU's x, y, z (one sigma)\n", ts.x(),
+              ts.y(), ts.z(), rs.x(), rs.y(), rs.z());
   std::printf("  %s\n", r.spatial.message.c_str());
   if (r.from_motion)
     std::printf(
         "  the still start could not tell the mount: found on the solid-state LiDAR's map of the first seconds, "
-        "to centimetres and tenths of a degree; mmlio run refines it (online_calibration) and writes "
+        "to centimetres or decimetres and up to a degree (the sigmas above); mmlio run refines it (online_calibration) "
+        "and writes "
         "calibration_refined.yaml\n");
   if (r.temporal.ok)
     std::printf("  clock offset %.2f +- %.2f ms (t_imu = t_stamp + offset)%s%s\n", 1e3 * r.temporal.offset_s,

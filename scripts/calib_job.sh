@@ -50,6 +50,17 @@ try:
     Re = [r[:3] for r in est[0]]; Rt = [r[:3] for r in truth[0]]
     tr = sum(Re[i][j] * Rt[i][j] for i in range(3) for j in range(3))
     row["extrinsic_err_deg"] = math.degrees(math.acos(max(-1.0, min(1.0, (tr - 1) / 2))))
+    # Per axis against the stated sigmas: translation, and the rotation R_est R_truth^T as a vector.
+    text = open(f"{cell}/calib.yaml").read()
+    text = text[text.index("velodyne:"):]
+    ts = [float(x) for x in re.search(r"translation_sigma_m: \[([^\]]*)\]", text).group(1).split(",")]
+    rs = [math.radians(float(x)) for x in re.search(r"rotation_sigma_deg: \[([^\]]*)\]", text).group(1).split(",")]
+    D = [[sum(Re[i][k] * Rt[j][k] for k in range(3)) for j in range(3)] for i in range(3)]
+    ang = math.acos(max(-1.0, min(1.0, (D[0][0] + D[1][1] + D[2][2] - 1) / 2)))
+    f = ang / (2 * math.sin(ang)) if ang > 1e-9 else 0.5
+    w = [f * (D[2][1] - D[1][2]), f * (D[0][2] - D[2][0]), f * (D[1][0] - D[0][1])]
+    z = [abs(te[i] - tt[i]) / ts[i] for i in range(3)] + [abs(w[i]) / rs[i] for i in range(3)]
+    row["extrinsic_max_sigmas"] = max(z)
 except (FileNotFoundError, KeyError):
     row["extrinsic_err_mm"] = None
 print(json.dumps(row))

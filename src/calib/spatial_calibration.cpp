@@ -6,10 +6,14 @@
 #include <limits>
 #include <sstream>
 
+#include "mmlio/core/so3.hpp"
+
 namespace mmlio::calib {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 std::vector<Eigen::Vector3d> inRange(const std::vector<Eigen::Vector3d>& pts, double min_m, double max_m) {
   std::vector<Eigen::Vector3d> out;
@@ -132,6 +136,35 @@ double yawDeg(const Eigen::Isometry3d& T) {
   return std::atan2(x.y(), x.x()) / kDeg;
 }
 
+GicpConfig fineOnly(GicpConfig g) {
+  g.levels = 1;
+  g.max_corr_dist_coarse_m = g.max_corr_dist_fine_m;
+  return g;
+}
+
+/// The delete-a-group jackknife's covariance of the mount (translation, rotation; left increments
+/// from T) over `groups` registrations, the k-th without group k.
+template <typename FitWithout>
+Matrix6d jackknife(const Eigen::Isometry3d& T, int groups, const FitWithout& fit_without, int min_inliers) {
+  std::vector<Vector6d> moves;
+  for (int k = 0; k < groups; ++k) {
+    const GicpResult g = fit_without(k, groups);
+    if (g.inliers < min_inliers) continue;
+    const Eigen::Matrix3d dR = g.T_target_source.linear() * T.linear().transpose();
+    Vector6d d;
+    d << g.T_target_source.translation() - T.translation(), so3::log(Eigen::Quaterniond(dR));
+    moves.push_back(d);
+  }
+  if (moves.size() < 2) return Matrix6d::Zero();
+  Vector6d mean = Vector6d::Zero();
+  for (const Vector6d& d : moves) mean += d;
+  mean /= static_cast<double>(moves.size());
+  Matrix6d cov = Matrix6d::Zero();
+  for (const Vector6d& d : moves) cov += (d - mean) * (d - mean).transpose();
+  const double n = static_cast<double>(moves.size());
+  return cov * (n - 1) / n;
+}
+
 /// GICP runs from given mounts on the spinning points each puts in view, judged as the
 /// calibration judges them, and the yaw search built of them.
 class MountSearch {
@@ -164,6 +197,54 @@ class MountSearch {
   bool fits(const Attempt& a) const {
     return a.gicp.inliers >= cfg_.gicp.min_correspondences &&
            cloudsAgree(a.gicp.fitness_m, a.gicp.overlap, a.seen_through, cfg_);
+  }
+
+  /// How much the mount found depends on which part of the scene it stands on: GICP again from it
+  /// with each of cfg.sigma_groups azimuth strips of the spinning points in view left out.
+  Matrix6d stripJackknife(const Eigen::Isometry3d& T) const {
+    const std::vector<Eigen::Vector3d> source = cropToSolidView(spinning_, T, views_, cfg_);
+    std::vector<std::pair<double, std::size_t>> by_azimuth;
+    by_azimuth.reserve(source.size());
+    for (std::size_t i = 0; i < source.size(); ++i) {
+      const Eigen::Vector3d q = T * source[i];
+      by_azimuth.emplace_back(std::atan2(q.y(), q.x()), i);
+    }
+    std::sort(by_azimuth.begin(), by_azimuth.end());
+    const std::size_t n = by_azimuth.size();
+    const auto without = [&](int k, int groups) {
+      const std::size_t begin = n * k / groups, end = n * (k + 1) / groups;
+      std::vector<Eigen::Vector3d> kept;
+      kept.reserve(n);
+      for (std::size_t j = 0; j < n; ++j)
+        if (j < begin || j >= end) kept.push_back(source[by_azimuth[j].second]);
+      return gicp(kept, solid_, T, fineOnly(cfg_.gicp));
+    };
+    return jackknife(T, cfg_.sigma_groups, without, cfg_.gicp.min_correspondences);
+  }
+
+  /// Where the solid-state view is frames placed by odometry, their placement's drift: the mount
+  /// found on the start and the earlier half of the moving frames against the one found on the
+  /// start and the later half (the drift grows along the way; what it moves the mount by, both
+  /// halves share in part, so the whole difference is stated, not half of it).
+  Matrix6d halvesDisagreement(const Eigen::Isometry3d& T, const std::vector<SolidView::Frame>& frames) const {
+    const int moving = static_cast<int>(frames.size()) - 1;
+    if (moving < 2) return Matrix6d::Zero();
+    const std::vector<Eigen::Vector3d> source = cropToSolidView(spinning_, T, views_, cfg_);
+    std::optional<Eigen::Isometry3d> half[2];
+    for (int h = 0; h < 2; ++h) {
+      std::vector<Eigen::Vector3d> solid;
+      for (int f = 0; f <= moving; ++f)
+        if (f == 0 || (2 * (f - 1) / moving) == h)
+          for (const Eigen::Vector3d& p : frames[f].returns) solid.push_back(frames[f].T_start_sensor * p);
+      const GicpTarget target(map::voxelCentroids(solid, cfg_.target_voxel_m), cfg_.gicp);
+      const GicpResult g = gicp(source, target, T, fineOnly(cfg_.gicp));
+      if (g.inliers >= cfg_.gicp.min_correspondences) half[h] = g.T_target_source;
+    }
+    if (!half[0] || !half[1]) return Matrix6d::Zero();
+    Vector6d d;
+    d << half[1]->translation() - half[0]->translation(),
+        so3::log(Eigen::Quaterniond(half[1]->linear() * half[0]->linear().transpose()));
+    return Matrix6d(d.cwiseAbs2().asDiagonal());
   }
 
   /// Matched points not seen through: what ranks the finalists.
@@ -362,6 +443,9 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
     return res;
   }
   res.ok = true;
+  res.covariance = search.stripJackknife(g.T_target_source) + search.halvesDisagreement(g.T_target_source, frames);
+  res.covariance.diagonal().head<3>().array() += std::pow(cfg.sigma_floor_translation_m, 2);
+  res.covariance.diagonal().tail<3>().array() += std::pow(cfg.sigma_floor_rotation_deg * kDeg, 2);
   res.message = "GICP fitness " + fmt(g.fitness_m) + " m, overlap " + fmt(g.overlap) + ", conditioning " +
                 fmt(conditioning) + " on " + std::to_string(best.source_points) + " spinning / " +
                 std::to_string(solid_points) + " solid-state points" + (res.yaw_searched ? " (yaw search)" : "");

@@ -309,6 +309,17 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
   }
   if (!res.spatial.ok) throw Error("spatial calibration refused: " + res.spatial.message);
   const Eigen::Isometry3d T_imu_spinning = solid->T_imu_sensor * res.spatial.T_solid_spinning;
+  {
+    Eigen::Matrix<double, 6, 6> to_imu = Eigen::Matrix<double, 6, 6>::Zero();
+    to_imu.topLeftCorner<3, 3>() = to_imu.bottomRightCorner<3, 3>() = solid->T_imu_sensor.linear();
+    Eigen::Matrix<double, 6, 1> var = (to_imu * res.spatial.covariance * to_imu.transpose()).diagonal();
+    if (res.from_motion) {
+      var.head<3>().array() += std::pow(opt.motion_sigma_translation_m, 2);
+      var.tail<3>().array() += std::pow(opt.motion_sigma_rotation_deg * M_PI / 180.0, 2);
+    }
+    res.translation_sigma_m = var.head<3>().cwiseMax(0).cwiseSqrt();
+    res.rotation_sigma_rad = var.tail<3>().cwiseMax(0).cwiseSqrt();
+  }
   log::emit(log::Level::kInfo, "spatial calibration: ", res.spatial.message);
 
   // ---- temporal ----
@@ -337,6 +348,13 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
   res.extra[spinning->name]["yaw_searched"] = res.spatial.yaw_searched;
   res.extra[spinning->name]["seen_through"] = res.spatial.seen_through;
   res.extra[spinning->name]["from_motion"] = res.from_motion;
+  const Eigen::Vector3d rotation_sigma_deg = res.rotation_sigma_rad * (180.0 / M_PI);
+  for (int i = 0; i < 3; ++i) {
+    res.extra[spinning->name]["translation_sigma_m"].push_back(res.translation_sigma_m(i));
+    res.extra[spinning->name]["rotation_sigma_deg"].push_back(rotation_sigma_deg(i));
+  }
+  res.extra[spinning->name]["translation_sigma_m"].SetStyle(YAML::EmitterStyle::Flow);
+  res.extra[spinning->name]["rotation_sigma_deg"].SetStyle(YAML::EmitterStyle::Flow);
   res.extra[spinning->name]["time_offset_estimated"] = res.temporal.ok;
   if (res.temporal.ok) {
     res.extra[spinning->name]["time_offset_sigma_s"] = res.temporal.sigma_s;
@@ -356,6 +374,8 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
   j["reference_points_used"] = res.spatial.solid_points;
   j["spatial"] = res.spatial.message;
   j["from_motion"] = res.from_motion;
+  j["translation_sigma_m"] = {res.translation_sigma_m.x(), res.translation_sigma_m.y(), res.translation_sigma_m.z()};
+  j["rotation_sigma_deg"] = {rotation_sigma_deg.x(), rotation_sigma_deg.y(), rotation_sigma_deg.z()};
   j["time_offset_s"] = offset_s;
   j["time_offset_estimated"] = res.temporal.ok;
   j["time_offset_sigma_s"] = res.temporal.sigma_s;

@@ -81,6 +81,35 @@ TEST(SpatialCalibration, FindsTheMountByYawSearchWithoutAGuess) {
   expectClose(r.T_solid_spinning, trueSolidSpinning(sim) * turn);
 }
 
+// The stated uncertainty is honest: the error within three sigmas on every axis, and the sigma small
+// enough to mean something (a few millimetres, hundredths of a degree).
+TEST(SpatialCalibration, ItsStatedSigmaCoversItsErrorOnMountsDrawnAtRandom) {
+  for (const std::uint64_t seed : {2, 3, 4}) {
+    sim::SimOptions options = sim::fullWalk(seed == 3 ? "lab" : "office");
+    options.seed = seed;
+    options.random_mount = true;
+    const sim::Simulator sim(options);
+    const Stationary s = stationaryStart(sim);
+    const Eigen::Isometry3d truth = trueSolidSpinning(sim);
+    const SpatialCalibrationResult r = calibrateSpinningToSolid(s.spinning, s.solid, std::nullopt);
+    ASSERT_TRUE(r.ok) << r.message;
+    const Eigen::Vector3d dt = r.T_solid_spinning.translation() - truth.translation();
+    const Eigen::AngleAxisd da(r.T_solid_spinning.linear() * truth.linear().transpose());
+    const Eigen::Vector3d dr = da.angle() * da.axis();
+    const Eigen::Matrix<double, 6, 1> sigma = r.covariance.diagonal().cwiseSqrt();
+    std::printf(
+        "seed %d: error (%.1f %.1f %.1f) mm (%.3f %.3f %.3f) deg, sigma (%.1f %.1f %.1f) mm (%.3f %.3f %.3f) deg\n",
+        static_cast<int>(seed), 1e3 * dt.x(), 1e3 * dt.y(), 1e3 * dt.z(), dr.x() / kDeg, dr.y() / kDeg, dr.z() / kDeg,
+        1e3 * sigma(0), 1e3 * sigma(1), 1e3 * sigma(2), sigma(3) / kDeg, sigma(4) / kDeg, sigma(5) / kDeg);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_LE(std::abs(dt(i)), 3 * sigma(i)) << "translation axis " << i << ", seed " << seed;
+      EXPECT_LE(std::abs(dr(i)), 3 * sigma(3 + i)) << "rotation axis " << i << ", seed " << seed;
+      EXPECT_LT(sigma(i), 0.006);
+      EXPECT_LT(sigma(3 + i), 0.06 * kDeg);
+    }
+  }
+}
+
 TEST(SpatialCalibration, RefusesCloudsOfDifferentPlaces) {
   const sim::Simulator office(sim::fullWalk("office"));
   const sim::Simulator hall(sim::fullWalk("hall"));

@@ -40,6 +40,10 @@ struct SpatialCalibrationConfig {
   double distinct_rotation_deg = 5.0;          // ... this are the same mount
   double ambiguity_ratio = 0.8;                // the runner-up explains this fraction of the winner's points: refuse
   bool probe_quarter_turns = true;             // a guess that fits: its quarter turns fitting as well refuse too
+  int sigma_groups = 10;                       // the stated uncertainty covers leaving out any one of this many
+                                               // azimuth strips of the spinning points in view ...
+  double sigma_floor_translation_m = 0.0015;   // ... plus what no strip reveals, a bias they all share (the
+  double sigma_floor_rotation_deg = 0.015;     // voxel filter, mixed pixels at edges), per axis
   int min_points = 500;                        // fewer points on either side: refuse
   double min_translation_conditioning = 0.05;  // weakest / strongest translation eigenvalue of the GICP
                                                // Hessian below this: degenerate overlap (a wall), refuse
@@ -85,6 +89,9 @@ struct SpatialCalibrationResult {
   double seen_through = 0;                 // fraction of the spinning points in view the solid-state LiDAR sees through
   std::vector<MountCandidate> candidates;  // the yaw search's finalists, best first
   Eigen::Matrix<double, 6, 6> hessian = Eigen::Matrix<double, 6, 6>::Zero();  // GICP, (dp, dtheta)
+  // The stated uncertainty of T_solid_spinning: (translation, rotation about the solid-state axes),
+  // m and rad, from leaving out parts of the scene (SpatialCalibrationConfig::sigma_groups).
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
 };
 
 /// Whether a registration of the two views passes the calibration's tests of agreement: fitness,

@@ -27,6 +27,11 @@ struct BagCalibrationOptions {
   double motion_window_s = 20.0;     // when the still start cannot tell the mount: the solid-state
                                      // LiDAR's map of this much of the bag (0: refuse instead)
   double motion_radius_m = 5.0;      // ... of its frames within this distance of the start
+  // A mount from motion stands on the frames' placement by the solid-state odometry, whose drift
+  // over the window (centimetres to decimetres, up to a degree along a wall it faced) the frames
+  // cannot tell apart from the mount: its stated uncertainty is at least this, per axis.
+  double motion_sigma_translation_m = 0.06;
+  double motion_sigma_rotation_deg = 0.5;
   calib::SpatialCalibrationConfig spatial;
   calib::TimeOffsetConfig temporal;
 };
@@ -37,8 +42,12 @@ struct BagCalibrationResult {
   calib::SpatialCalibrationResult spatial;
   calib::TimeOffsetResult temporal;  // temporal.ok == false: the config's clock offset was kept
   bool from_motion = false;          // the mount from the first seconds of motion, not the still start
-  Json report;                       // what was measured, for report.json
-  YAML::Node extra;                  // fitness, overlap, points, offset sigma: for writeCalibration
+  // The spinning LiDAR's stated extrinsic uncertainty in the IMU frame: one sigma of its position
+  // and of its rotation about the IMU's x, y, z axes (calib::SpatialCalibrationResult::covariance).
+  Eigen::Vector3d translation_sigma_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d rotation_sigma_rad = Eigen::Vector3d::Zero();
+  Json report;       // what was measured, for report.json
+  YAML::Node extra;  // fitness, overlap, points, offset sigma: for writeCalibration
 };
 
 /// Whether the spinning LiDAR's mount given in a rig file agrees with the solid-state LiDAR's view
