@@ -5,7 +5,8 @@
 # service, that the node's odometry equals `mmlio run`'s on the same bag and that its loop-corrected
 # trajectory scores within 5 % of it, with the loops listed in its report. Then a node localizing in
 # the session `mmlio run` wrote, and one killed by SIGKILL and restarted on its autosave; then a node
-# started mid-motion that is fed the bag again from its start (its clock goes back).
+# started mid-motion that is fed the bag again from its start (its clock goes back); then the spinning
+# LiDAR's and the IMU's drivers stopping and restarting.
 # Usage: live_node_test.sh MMLIO MMLIO_NODE CONFIG_DIR
 set -euo pipefail
 MMLIO="$1" NODE="$2" CONFIG_DIR="$3"
@@ -225,6 +226,46 @@ check(apart(0, 10) < 0.10 and apart(10, 31) < 0.03,
       f"both passes in one world: the second within {100 * apart(0, 10):.2f} cm of the first until 10 s, "
       f"{100 * apart(10, 31):.2f} cm after")
 check(again_ate <= 1.5 * run_ate + 1e-4, f"second pass ATE {100 * again_ate:.2f} cm (mmlio run {100 * run_ate:.2f} cm)")
+finish()
+PY
+
+# The spinning LiDAR's driver stops 12 s in for 5 s and restarts (a new publisher, its seq from 0
+# again), then the IMU's 22 s in for 2 s: the node rides on the solid-state LiDAR, then on the
+# LiDARs alone, and says which stream went missing, and when.
+stdbuf -oL -eL "$NODE" __name:=mmlio_restart _config:="$CONFIG_DIR/hvi.yaml" _calib:="$truth" \
+  _out_dir:="$work/restart" > "$work/restart_node.log" 2>&1 &
+restart_pid=$!
+pids+=($restart_pid)
+wait_for 30 rostopic info /mmlio_restart/odometry || fail "the node for the driver restarts never advertised"
+/usr/bin/python3 "$(dirname "$0")/restart_play.py" "$bag" /velodyne_points:12:5,/livox/imu:22:2 \
+  > "$work/play_restart.log" 2>&1 || fail "restart_play"
+sleep 3
+stop_node "$restart_pid"
+restart_ate=$(ate "$MMLIO" "$work/restart/trajectory_odometry.tum")
+python3 - "$work" "$restart_ate" "$run_odo_ate" << 'PY' || fail "driver restart checks above"
+import json, sys
+from live_checks import check, finish, read_tum
+
+work, restart_ate, run_ate = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])  # odometry, both
+report = json.load(open(f"{work}/restart/report.json"))
+velodyne = report["input"]["lidar_streams"]["velodyne"]
+t0 = min(st["first_s"] for st in report["input"]["lidar_streams"].values())
+gaps = [g for g in velodyne["gaps"] if 11.0 < g["after_s"] - t0 < 13.0 and g["missing"] >= 45]
+check(len(gaps) == 1, f"the velodyne's 5 s silence is one gap 12 s in ({velodyne['gaps']})")
+check(report["status"].startswith("degraded") and "velodyne scans missing" in report["status"],
+      f"the run is degraded and names the LiDAR ({report['status'][:90]})")
+imu = report["input"]["imu_stream"]
+imu_gaps = [g for g in imu["gaps"] if 21.5 < g["after_s"] - t0 < 22.5 and g["missing"] >= 300]
+check(len(imu_gaps) == 1, f"the IMU's 2 s silence is one gap 22 s in ({imu['gaps']})")
+check("IMU" in report["status"], f"... and the status names it ({report['status'][:160]})")
+odo = read_tum(f"{work}/restart/trajectory_odometry.tum")
+during = [p for p in odo if 12.5 < float(p[0]) - t0 < 16.5]
+check(len(during) >= 35, f"odometry goes on while the velodyne is silent ({len(during)} poses in 4 s)")
+after = [p for p in odo if 18.0 < float(p[0]) - t0 < 21.0]
+check(len(after) >= 25, f"... and after its driver is back ({len(after)} poses in 3 s)")
+during = [p for p in odo if 22.5 < float(p[0]) - t0 < 23.5]
+check(len(during) >= 8, f"... and while the IMU is silent ({len(during)} poses in 1 s)")
+check(restart_ate <= 2.0 * run_ate, f"ATE {100 * restart_ate:.2f} cm across the restarts, within 2x mmlio run's {100 * run_ate:.2f} cm")
 finish()
 PY
 echo "PASS"
