@@ -6,8 +6,9 @@
 // (TOPIC:FROM_S:SECONDS, several separated by commas), TOPIC's driver stops FROM_S seconds into the
 // bag for SECONDS and then restarts: a new participant and writer (a new process would have them)
 // publish the rest. With LOOP=N the bag is played N times, each pass with the bag's own stamps (as
-// `rosbag play -l`: the clock goes back at every restart).
-// Usage: [PAUSE=...] [LOOP=N] ros2_play DOMAIN BAG RATE LIVOX_TYPE [udp|shm|default]
+// `rosbag play -l`: the clock goes back at every restart). With FROM=S the first pass starts S seconds
+// into the bag (as `rosbag play -s S`: a node started after the drivers sees the rig in motion).
+// Usage: [PAUSE=...] [LOOP=N] [FROM=S] ros2_play DOMAIN BAG RATE LIVOX_TYPE [udp|shm|default]
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
@@ -77,12 +78,15 @@ int main(int argc, char** argv) {
     std::map<std::string, std::unique_ptr<DdsParticipant>> restarted;  // a paused topic's driver after its restart
     const char* loop_env = std::getenv("LOOP");
     const int passes = loop_env ? std::max(1, std::atoi(loop_env)) : 1;
+    const char* from_env = std::getenv("FROM");
+    const double from_s = from_env ? std::max(0.0, std::atof(from_env)) : 0.0;
     const std::uint64_t t0 = records.front().time_ns;
     const double bag_s = 1e-9 * static_cast<double>(records.back().time_ns - t0) + 0.1;
     const auto start = std::chrono::steady_clock::now();
     for (int pass = 0; pass < passes; ++pass) {
       for (const auto& r : records) {
         const double t = 1e-9 * static_cast<double>(r.time_ns - t0);
+        if (pass == 0 && t < from_s) continue;
         const auto paused = std::find_if(pauses.begin(), pauses.end(),
                                          [&](const Pause& p) { return p.topic == r.topic && t >= p.from_s; });
         if (pass == 0 && paused != pauses.end()) {
@@ -94,7 +98,7 @@ int main(int argc, char** argv) {
             std::cerr << "ros2_play: " << r.topic << " restarted after " << paused->seconds << " s\n";
           }
         }
-        const double due_s = (pass * bag_s + t) / rate;
+        const double due_s = (pass * bag_s + t - from_s) / rate;
         std::this_thread::sleep_until(start + std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 * due_s)));
         if (!writers[r.topic]->write(r.cdr)) std::cerr << "ros2_play: DDS refused a message on " << r.topic << "\n";
       }
