@@ -50,8 +50,7 @@ void printCalibration(const pipeline::BagCalibrationResult& r) {
     std::printf(
         "  the still start could not tell the mount: found on the solid-state LiDAR's map of the first seconds, "
         "to centimetres or decimetres and up to a degree (the sigmas above); mmlio run refines it (online_calibration) "
-        "and writes "
-        "calibration_refined.yaml\n");
+        "and writes calibration_refined.yaml\n");
   if (r.temporal.ok)
     std::printf("  clock offset %.2f +- %.2f ms (t_imu = t_stamp + offset)%s%s\n", 1e3 * r.temporal.offset_s,
                 1e3 * r.temporal.sigma_s,

@@ -72,22 +72,36 @@ struct RightPosePlus {
   }
 };
 
-/// Relative-pose residual between poses a and b (see the header for the formula).
+/// A measured pose and the residual of an estimate against it: S [p_est - p; 2 vec(q^-1 q_est)]
+/// (see the header for the formula).
+struct MeasuredPose {
+  MeasuredPose(const Eigen::Isometry3d& T, const Matrix6d& sqrt_info)
+      : p(T.translation()), q(Eigen::Quaterniond(T.rotation()).normalized()), S(sqrt_info) {}
+
+  template <typename T>
+  void residual(const Eigen::Matrix<T, 3, 1>& p_est, const Eigen::Quaternion<T>& q_est, T* residual) const {
+    const Eigen::Quaternion<T> dq = q.template cast<T>().conjugate() * q_est;
+    Eigen::Matrix<T, 6, 1> r;
+    r.template head<3>() = p_est - p.template cast<T>();
+    r.template tail<3>() = T(2) * dq.vec();
+    Eigen::Map<Eigen::Matrix<T, 6, 1>> out(residual);
+    out = S.template cast<T>() * r;
+  }
+
+  Eigen::Vector3d p;
+  Eigen::Quaterniond q;
+  Matrix6d S;
+};
+
+/// Relative-pose residual between poses a and b: b in a's frame against the measured T_a_b.
 struct RelativePoseCost {
-  RelativePoseCost(const Eigen::Isometry3d& T_a_b, const Matrix6d& sqrt_info)
-      : p_ab(T_a_b.translation()), q_ab(Eigen::Quaterniond(T_a_b.rotation()).normalized()), S(sqrt_info) {}
+  RelativePoseCost(const Eigen::Isometry3d& T_a_b, const Matrix6d& sqrt_info) : ab(T_a_b, sqrt_info) {}
 
   template <typename T> bool operator()(const T* a, const T* b, T* residual) const {
     const Eigen::Map<const Eigen::Matrix<T, 3, 1>> p_a(a), p_b(b);
     const Eigen::Map<const Eigen::Quaternion<T>> q_a(a + 3), q_b(b + 3);
     const Eigen::Quaternion<T> q_a_inv = q_a.conjugate();
-    const Eigen::Matrix<T, 3, 1> p_ab_est = q_a_inv * (p_b - p_a);
-    const Eigen::Quaternion<T> dq = q_ab.template cast<T>().conjugate() * (q_a_inv * q_b);
-    Eigen::Matrix<T, 6, 1> r;
-    r.template head<3>() = p_ab_est - p_ab.template cast<T>();
-    r.template tail<3>() = T(2) * dq.vec();
-    Eigen::Map<Eigen::Matrix<T, 6, 1>> out(residual);
-    out = S.template cast<T>() * r;
+    ab.residual<T>(q_a_inv * (p_b - p_a), q_a_inv * q_b, residual);
     return true;
   }
 
@@ -95,25 +109,16 @@ struct RelativePoseCost {
     return new ceres::AutoDiffCostFunction<RelativePoseCost, 6, 7, 7>(new RelativePoseCost(T_a_b, sqrt_info));
   }
 
-  Eigen::Vector3d p_ab;
-  Eigen::Quaterniond q_ab;
-  Matrix6d S;
+  MeasuredPose ab;
 };
 
 /// Absolute-pose residual of a pose against a measurement (same tangent as RelativePoseCost).
 struct PriorCost {
-  PriorCost(const Eigen::Isometry3d& T, const Matrix6d& sqrt_info)
-      : p(T.translation()), q(Eigen::Quaterniond(T.rotation()).normalized()), S(sqrt_info) {}
+  PriorCost(const Eigen::Isometry3d& T, const Matrix6d& sqrt_info) : measured(T, sqrt_info) {}
 
   template <typename T> bool operator()(const T* x, T* residual) const {
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> p_x(x);
-    const Eigen::Map<const Eigen::Quaternion<T>> q_x(x + 3);
-    const Eigen::Quaternion<T> dq = q.template cast<T>().conjugate() * q_x;
-    Eigen::Matrix<T, 6, 1> r;
-    r.template head<3>() = p_x - p.template cast<T>();
-    r.template tail<3>() = T(2) * dq.vec();
-    Eigen::Map<Eigen::Matrix<T, 6, 1>> out(residual);
-    out = S.template cast<T>() * r;
+    measured.residual<T>(Eigen::Map<const Eigen::Matrix<T, 3, 1>>(x), Eigen::Map<const Eigen::Quaternion<T>>(x + 3),
+                         residual);
     return true;
   }
 
@@ -121,9 +126,7 @@ struct PriorCost {
     return new ceres::AutoDiffCostFunction<PriorCost, 6, 7>(new PriorCost(T, sqrt_info));
   }
 
-  Eigen::Vector3d p;
-  Eigen::Quaterniond q;
-  Matrix6d S;
+  MeasuredPose measured;
 };
 
 /// Keeps a keyframe's gravity direction (roll, pitch) at its odometry value.

@@ -142,18 +142,31 @@ GicpConfig fineOnly(GicpConfig g) {
   return g;
 }
 
-/// The delete-a-group jackknife's covariance of the mount (translation, rotation; left increments
-/// from T) over `groups` registrations, the k-th without group k.
+/// How far `to` lies from `from`: (translation difference, rotation to . from^-1 as a vector).
+Vector6d moveBetween(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to) {
+  Vector6d d;
+  d << to.translation() - from.translation(), so3::log(Eigen::Quaterniond(to.linear() * from.linear().transpose()));
+  return d;
+}
+
+/// The frames' returns in the start frame, thinned to voxel_m: those of the frames `keep` keeps.
+template <typename Keep> std::vector<Eigen::Vector3d> inStartFrame(const std::vector<SolidView::Frame>& frames,
+                                                                   double voxel_m, const Keep& keep) {
+  std::vector<Eigen::Vector3d> out;
+  for (std::size_t f = 0; f < frames.size(); ++f)
+    if (keep(f))
+      for (const Eigen::Vector3d& p : frames[f].returns) out.push_back(frames[f].T_start_sensor * p);
+  return map::voxelCentroids(out, voxel_m);
+}
+
+/// The delete-a-group jackknife's covariance of the mount T over `groups` registrations, the k-th
+/// (fit_without(k)) without group k.
 template <typename FitWithout>
 Matrix6d jackknife(const Eigen::Isometry3d& T, int groups, const FitWithout& fit_without, int min_inliers) {
   std::vector<Vector6d> moves;
   for (int k = 0; k < groups; ++k) {
-    const GicpResult g = fit_without(k, groups);
-    if (g.inliers < min_inliers) continue;
-    const Eigen::Matrix3d dR = g.T_target_source.linear() * T.linear().transpose();
-    Vector6d d;
-    d << g.T_target_source.translation() - T.translation(), so3::log(Eigen::Quaterniond(dR));
-    moves.push_back(d);
+    const GicpResult g = fit_without(k);
+    if (g.inliers >= min_inliers) moves.push_back(moveBetween(T, g.T_target_source));
   }
   if (moves.size() < 2) return Matrix6d::Zero();
   Vector6d mean = Vector6d::Zero();
@@ -199,10 +212,19 @@ class MountSearch {
            cloudsAgree(a.gicp.fitness_m, a.gicp.overlap, a.seen_through, cfg_);
   }
 
+  /// The stated uncertainty of the mount T (see SpatialCalibrationResult::covariance), on the
+  /// spinning points it puts in view.
+  Matrix6d covariance(const Eigen::Isometry3d& T, const std::vector<SolidView::Frame>& frames) const {
+    const std::vector<Eigen::Vector3d> source = cropToSolidView(spinning_, T, views_, cfg_);
+    Matrix6d cov = stripJackknife(T, source) + halvesDisagreement(T, source, frames);
+    cov.diagonal().head<3>().array() += std::pow(cfg_.sigma_floor_translation_m, 2);
+    cov.diagonal().tail<3>().array() += std::pow(cfg_.sigma_floor_rotation_deg * kDeg, 2);
+    return cov;
+  }
+
   /// How much the mount found depends on which part of the scene it stands on: GICP again from it
   /// with each of cfg.sigma_groups azimuth strips of the spinning points in view left out.
-  Matrix6d stripJackknife(const Eigen::Isometry3d& T) const {
-    const std::vector<Eigen::Vector3d> source = cropToSolidView(spinning_, T, views_, cfg_);
+  Matrix6d stripJackknife(const Eigen::Isometry3d& T, const std::vector<Eigen::Vector3d>& source) const {
     std::vector<std::pair<double, std::size_t>> by_azimuth;
     by_azimuth.reserve(source.size());
     for (std::size_t i = 0; i < source.size(); ++i) {
@@ -211,7 +233,8 @@ class MountSearch {
     }
     std::sort(by_azimuth.begin(), by_azimuth.end());
     const std::size_t n = by_azimuth.size();
-    const auto without = [&](int k, int groups) {
+    const int groups = cfg_.sigma_groups;
+    const auto without = [&](int k) {
       const std::size_t begin = n * k / groups, end = n * (k + 1) / groups;
       std::vector<Eigen::Vector3d> kept;
       kept.reserve(n);
@@ -219,32 +242,27 @@ class MountSearch {
         if (j < begin || j >= end) kept.push_back(source[by_azimuth[j].second]);
       return gicp(kept, solid_, T, fineOnly(cfg_.gicp));
     };
-    return jackknife(T, cfg_.sigma_groups, without, cfg_.gicp.min_correspondences);
+    return jackknife(T, groups, without, cfg_.gicp.min_correspondences);
   }
 
   /// Where the solid-state view is frames placed by odometry, their placement's drift: the mount
   /// found on the start and the earlier half of the moving frames against the one found on the
   /// start and the later half (the drift grows along the way; what it moves the mount by, both
   /// halves share in part, so the whole difference is stated, not half of it).
-  Matrix6d halvesDisagreement(const Eigen::Isometry3d& T, const std::vector<SolidView::Frame>& frames) const {
-    const int moving = static_cast<int>(frames.size()) - 1;
-    if (moving < 2) return Matrix6d::Zero();
-    const std::vector<Eigen::Vector3d> source = cropToSolidView(spinning_, T, views_, cfg_);
+  Matrix6d halvesDisagreement(const Eigen::Isometry3d& T, const std::vector<Eigen::Vector3d>& source,
+                              const std::vector<SolidView::Frame>& frames) const {
+    const std::size_t moving = frames.size() - 1;
+    if (frames.size() < 3) return Matrix6d::Zero();
     std::optional<Eigen::Isometry3d> half[2];
-    for (int h = 0; h < 2; ++h) {
-      std::vector<Eigen::Vector3d> solid;
-      for (int f = 0; f <= moving; ++f)
-        if (f == 0 || (2 * (f - 1) / moving) == h)
-          for (const Eigen::Vector3d& p : frames[f].returns) solid.push_back(frames[f].T_start_sensor * p);
-      const GicpTarget target(map::voxelCentroids(solid, cfg_.target_voxel_m), cfg_.gicp);
+    for (std::size_t h = 0; h < 2; ++h) {
+      const GicpTarget target(
+          inStartFrame(frames, cfg_.target_voxel_m, [&](std::size_t f) { return f == 0 || 2 * (f - 1) / moving == h; }),
+          cfg_.gicp);
       const GicpResult g = gicp(source, target, T, fineOnly(cfg_.gicp));
       if (g.inliers >= cfg_.gicp.min_correspondences) half[h] = g.T_target_source;
     }
     if (!half[0] || !half[1]) return Matrix6d::Zero();
-    Vector6d d;
-    d << half[1]->translation() - half[0]->translation(),
-        so3::log(Eigen::Quaterniond(half[1]->linear() * half[0]->linear().transpose()));
-    return Matrix6d(d.cwiseAbs2().asDiagonal());
+    return Matrix6d(moveBetween(*half[0], *half[1]).cwiseAbs2().asDiagonal());
   }
 
   /// Matched points not seen through: what ranks the finalists.
@@ -336,9 +354,7 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
   if (frames.size() == 1 && frames[0].T_start_sensor.isApprox(Eigen::Isometry3d::Identity())) {
     solid = frames[0].returns;
   } else {
-    for (const SolidView::Frame& f : frames)
-      for (const Eigen::Vector3d& p : f.returns) solid.push_back(f.T_start_sensor * p);
-    solid = map::voxelCentroids(solid, cfg.target_voxel_m);
+    solid = inStartFrame(frames, cfg.target_voxel_m, [](std::size_t) { return true; });
   }
   const auto spinning = map::voxelCentroids(inRange(spinning_in, cfg.min_range_m, cfg.max_range_m), cfg.source_voxel_m);
   res.solid_points = static_cast<int>(solid.size());
@@ -443,9 +459,7 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
     return res;
   }
   res.ok = true;
-  res.covariance = search.stripJackknife(g.T_target_source) + search.halvesDisagreement(g.T_target_source, frames);
-  res.covariance.diagonal().head<3>().array() += std::pow(cfg.sigma_floor_translation_m, 2);
-  res.covariance.diagonal().tail<3>().array() += std::pow(cfg.sigma_floor_rotation_deg * kDeg, 2);
+  res.covariance = search.covariance(g.T_target_source, frames);
   res.message = "GICP fitness " + fmt(g.fitness_m) + " m, overlap " + fmt(g.overlap) + ", conditioning " +
                 fmt(conditioning) + " on " + std::to_string(best.source_points) + " spinning / " +
                 std::to_string(solid_points) + " solid-state points" + (res.yaw_searched ? " (yaw search)" : "");

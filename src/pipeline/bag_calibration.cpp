@@ -213,6 +213,20 @@ calib::SolidView solidViewFromMotion(const std::string& bag_path, const config::
   return view;
 }
 
+/// res->translation_sigma_m and rotation_sigma_rad: the spatial calibration's covariance turned
+/// into the IMU frame (R_imu_solid), at least the drift of a view from motion.
+void stateSigmas(const Eigen::Matrix3d& R_imu_solid, const BagCalibrationOptions& opt, BagCalibrationResult* res) {
+  Eigen::Matrix<double, 6, 6> to_imu = Eigen::Matrix<double, 6, 6>::Zero();
+  to_imu.topLeftCorner<3, 3>() = to_imu.bottomRightCorner<3, 3>() = R_imu_solid;
+  Eigen::Matrix<double, 6, 1> var = (to_imu * res->spatial.covariance * to_imu.transpose()).diagonal();
+  if (res->from_motion) {
+    var.head<3>().array() += std::pow(opt.motion_sigma_translation_m, 2);
+    var.tail<3>().array() += std::pow(opt.motion_sigma_rotation_deg * M_PI / 180.0, 2);
+  }
+  res->translation_sigma_m = var.head<3>().cwiseMax(0).cwiseSqrt();
+  res->rotation_sigma_rad = var.tail<3>().cwiseMax(0).cwiseSqrt();
+}
+
 /// The mount check's verdict on GICP run from the given mount (no search) on what `where` names.
 MountCheck judgeMount(const calib::SpatialCalibrationResult& r, const Eigen::Isometry3d& given,
                       const std::string& spinning, const std::string& where, const BagCalibrationOptions& opt,
@@ -309,17 +323,7 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
   }
   if (!res.spatial.ok) throw Error("spatial calibration refused: " + res.spatial.message);
   const Eigen::Isometry3d T_imu_spinning = solid->T_imu_sensor * res.spatial.T_solid_spinning;
-  {
-    Eigen::Matrix<double, 6, 6> to_imu = Eigen::Matrix<double, 6, 6>::Zero();
-    to_imu.topLeftCorner<3, 3>() = to_imu.bottomRightCorner<3, 3>() = solid->T_imu_sensor.linear();
-    Eigen::Matrix<double, 6, 1> var = (to_imu * res.spatial.covariance * to_imu.transpose()).diagonal();
-    if (res.from_motion) {
-      var.head<3>().array() += std::pow(opt.motion_sigma_translation_m, 2);
-      var.tail<3>().array() += std::pow(opt.motion_sigma_rotation_deg * M_PI / 180.0, 2);
-    }
-    res.translation_sigma_m = var.head<3>().cwiseMax(0).cwiseSqrt();
-    res.rotation_sigma_rad = var.tail<3>().cwiseMax(0).cwiseSqrt();
-  }
+  stateSigmas(solid->T_imu_sensor.linear(), opt, &res);
   log::emit(log::Level::kInfo, "spatial calibration: ", res.spatial.message);
 
   // ---- temporal ----
