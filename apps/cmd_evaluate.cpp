@@ -146,6 +146,10 @@ void printTable(const eval::EvalResult& r, const EvaluateArgs& args) {
   out += row("RPE segments", static_cast<double>(r.rpe_num_segments), "", "%.0f");
   out += row("end-to-end (estimate)", r.end_to_end_m, "m");
   out += row("end-to-end (GT)", r.gt_end_to_end_m, "m");
+  out += "  against gravity, not aligned (GT's z must be up):\n";
+  out += row("tilt RMSE", r.tilt_rmse_deg, "deg", "%.3f");
+  out += row("tilt max", r.tilt_max_deg, "deg", "%.3f");
+  out += row("height error max", r.height_error_max_m, "m");
   std::cout << out;
 }
 

@@ -36,8 +36,8 @@ def fmt(v, scale=100, unit="cm", digits=2):
 for r in rows:
     if r.get("people", 0):
         r["scene"] = f'{r["scene"]} +{r["people"]} people'
-print("| scene | run | runs | ATE median | ATE worst | end-to-end % of path median / worst | map to surfaces median | map off surfaces median / worst | HVI <= min(VI, HI) |")
-print("|---|---|---|---|---|---|---|---|---|")
+print("| scene | run | runs | ATE median | ATE worst | height against gravity, worst error median / worst | end-to-end % of path median / worst | map to surfaces median | map off surfaces median / worst | HVI <= min(VI, HI) |")
+print("|---|---|---|---|---|---|---|---|---|---|")
 base = ["office", "corridor", "corridor_blind", "hall", "stairs", "ramp", "lab"]
 scenes = sorted({r["scene"] for r in rows}, key=lambda s: (base.index(s.split()[0].split("+")[0]) if s.split()[0].split("+")[0] in base else 9, s))
 for sc in scenes:
@@ -50,6 +50,8 @@ for sc in scenes:
         ok = [r for r in rs if r["status"] in ("ok", "untrusted") and "ate_rmse_m" in r]
         untrusted = sum(r["status"] == "untrusted" for r in ok)
         ate = [r["ate_rmse_m"] for r in ok]
+        # What the alignment hides: a run tilted whole (evaluate: against gravity, not aligned).
+        height = [r["height_error_max_m"] for r in ok if "height_error_max_m" in r]
         # How far the end is off, beyond the true end-to-end distance (0 for routes that return).
         e2e = [100 * abs(r["end_to_end_m"] - r.get("gt_end_to_end_m", 0.0)) / r["path_length_m"]
                for r in ok if r.get("path_length_m")]
@@ -68,6 +70,7 @@ for sc in scenes:
         notes = ", ".join(n for n in (f"{untrusted} untrusted" if untrusted else "", f"{failed} failed" if failed else "") if n)
         print(f"| {sc} | {run} | {len(ok)}{f' ({notes})' if notes else ''} | "
               f"{fmt(statistics.median(ate)) if ate else 'n/a'} | {fmt(max(ate)) if ate else 'n/a'} | "
+              f"{f'{fmt(statistics.median(height), unit=None, digits=1)} / {fmt(max(height), digits=1)}' if height else 'n/a'} | "
               f"{f'{statistics.median(e2e):.3f} / {max(e2e):.3f}' if e2e else 'n/a'} | "
               f"{fmt(statistics.median(mp), 1000, 'mm', 1) if mp else 'n/a'} | "
               f"{f'{100 * statistics.median(off):.2f} / {100 * max(off):.2f} %' if off else 'n/a'} | {beat} |")

@@ -125,6 +125,20 @@ EvalResult evaluate(const Trajectory& gt, const Trajectory& est, const EvalOptio
   }
   result.ate_rot_rmse_deg = std::sqrt(rot_sq / n);
 
+  double tilt_sq = 0.0;
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    const Eigen::Vector3d up_gt = pairs[i].T_world_gt.linear().transpose() * Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d up_est = pairs[i].T_world_est.linear().transpose() * Eigen::Vector3d::UnitZ();
+    const double tilt_deg = std::atan2(up_gt.cross(up_est).norm(), up_gt.dot(up_est)) * 180.0 / M_PI;
+    tilt_sq += tilt_deg * tilt_deg;
+    result.tilt_max_deg = std::max(result.tilt_max_deg, tilt_deg);
+    const double climbed_est = p_est[i].z() - p_est.front().z(),
+                 climbed_gt = result.gt_xyz[i].z() - result.gt_xyz.front().z();
+    result.height_error_max_m =
+        std::max(result.height_error_max_m, std::abs(alignment.scale * climbed_est - climbed_gt));
+  }
+  result.tilt_rmse_deg = std::sqrt(tilt_sq / n);
+
   const RelativeError rpe = relativePoseError(gt_poses, est_poses, options.segment_m);
   result.rpe_10m_pct = rpe.translation_pct;
   result.rpe_10m_deg_per_m = rpe.rotation_deg_per_m;
@@ -156,6 +170,9 @@ std::string toJsonLine(const EvalResult& r) {
   appendCount(os, "num_associated", r.num_associated);
   appendNumber(os, "path_length_m", r.path_length_m);
   appendNumber(os, "scale", r.scale);
+  appendNumber(os, "tilt_rmse_deg", r.tilt_rmse_deg);
+  appendNumber(os, "tilt_max_deg", r.tilt_max_deg);
+  appendNumber(os, "height_error_max_m", r.height_error_max_m);
   os << '}';
   return os.str();
 }

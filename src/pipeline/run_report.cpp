@@ -46,6 +46,9 @@ Json evaluationJson(const eval::EvalResult& ev) {
   j["end_to_end_pct"] = ev.path_length_m > 0 ? 100.0 * ev.end_to_end_m / ev.path_length_m : 0.0;
   j["coverage"] = ev.coverage;
   j["associated_poses"] = ev.num_associated;
+  j["tilt_rmse_deg"] = ev.tilt_rmse_deg;  // against gravity, not aligned (eval::EvalResult)
+  j["tilt_max_deg"] = ev.tilt_max_deg;
+  j["height_error_max_m"] = ev.height_error_max_m;
   return j;
 }
 

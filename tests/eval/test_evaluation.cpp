@@ -60,6 +60,32 @@ TEST(Evaluation, RigidlyMovedCopyOfGroundTruthHasZeroAteAfterAlignmentAndFullCov
   EXPECT_GT(evaluate(gt, est, raw).ate_rmse_m, 10.0);
 }
 
+// A run tilted whole: the alignment turns it level (ATE zero), so only the metrics against gravity
+// can say that its height drifted with the distance travelled.
+TEST(Evaluation, ARunTiltedWholeHasZeroAteButItsTiltAndHeightErrorAreStated) {
+  const Trajectory gt = sample(straightX, 10.0, 0.0, 50.0);  // 50 m along x, level
+  const double tilt_rad = 0.5 * M_PI / 180.0;                // pitched 0.5 deg about y, and turned in yaw
+  const Eigen::Isometry3d T_est_gt =
+      pose(Eigen::Vector3d(1.0, 2.0, 0.0), Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()) *
+                                                              Eigen::AngleAxisd(tilt_rad, Eigen::Vector3d::UnitY())));
+  Trajectory est;
+  for (const StampedPose& p : gt) est.push_back({p.stamp_ns, T_est_gt * p.T_world_body});
+  const EvalResult tilted = evaluate(gt, est, {});
+  EXPECT_LT(tilted.ate_rmse_m, 1e-9);
+  EXPECT_NEAR(tilted.tilt_rmse_deg, 0.5, 1e-9);
+  EXPECT_NEAR(tilted.tilt_max_deg, 0.5, 1e-9);
+  EXPECT_NEAR(tilted.height_error_max_m, 50.0 * std::sin(tilt_rad), 1e-9);  // 44 cm after 50 m
+
+  // Turned in yaw and moved only: level, nothing to state.
+  Trajectory turned;
+  const Eigen::Isometry3d T_yaw =
+      pose(Eigen::Vector3d(1.0, 2.0, 3.0), Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ())));
+  for (const StampedPose& p : gt) turned.push_back({p.stamp_ns, T_yaw * p.T_world_body});
+  const EvalResult level = evaluate(gt, turned, {});
+  EXPECT_LT(level.tilt_max_deg, 1e-9);
+  EXPECT_LT(level.height_error_max_m, 1e-9);
+}
+
 TEST(Evaluation, OnePercentScaleDriftAlongAStraightPathGivesOnePercentRpe) {
   const Trajectory gt = sample(straightX, 200.0, 0.0, 60.0);  // 60 m at 1 m/s
   // The estimate travels 1.01 m per GT metre: every 10 m segment is 0.1 m too long.

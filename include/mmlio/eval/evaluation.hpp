@@ -33,6 +33,12 @@ struct EvalResult {
   double coverage = 0.0;         // (last - first associated estimate stamp) / GT time span
   double path_length_m = 0.0;    // GT path length over the associated poses
   double scale = 1.0;            // alignment scale (1 unless EvalOptions::scale)
+  // Against gravity, before any alignment (which turns a tilted run level and hides it): both worlds
+  // must have z up, as mmlio's estimate has. The tilt is the angle between the body's "up" in the
+  // estimate and in GT; the height error compares each pose's climb since the first associated one.
+  double tilt_rmse_deg = 0.0;
+  double tilt_max_deg = 0.0;
+  double height_error_max_m = 0.0;
 
   double gt_start_s = 0.0;                                     // stamp of the first GT pose, s
   std::vector<double> times_s;                                 // per associated pose: seconds since the first GT pose
