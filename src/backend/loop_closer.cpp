@@ -4,9 +4,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <sstream>
 
 #include "mmlio/core/log.hpp"
+#include "mmlio/core/short_number.hpp"
 
 namespace mmlio::backend {
 namespace {
@@ -17,13 +17,6 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 // decide that (a hall keyframe has ~9000 at 0.3 m, and the restarts were most of a loop check's
 // 2-3 s there; a corridor refinement rarely converges within its 20 iterations).
 constexpr std::size_t kMaxRestartSourcePoints = 2000;
-
-std::string fmt(double v) {
-  std::ostringstream os;
-  os.precision(3);
-  os << v;
-  return os.str();
-}
 
 /// The two horizontal principal axes of the points (largest spread first), unit, z = 0.
 std::array<Eigen::Vector3d, 2> horizontalAxes(const std::vector<Eigen::Vector3d>& pts, const Eigen::Isometry3d& T) {
@@ -99,8 +92,8 @@ AlignmentCheck checkAlignment(const std::vector<Eigen::Vector3d>& source, const 
     const IcpResult probe = alignPointToPlane(source, target, prior, at_pose);
     if (clearlyDegenerate(probe, cfg.prior_eigenvalue_fraction)) {
       v.icp = probe;
-      v.reason =
-          "degenerate geometry at the prior (translation eigenvalue " + fmt(probe.min_translation_eigenvalue) + ")";
+      v.reason = "degenerate geometry at the prior (translation eigenvalue " +
+                 shortNumber(probe.min_translation_eigenvalue) + ")";
       return v;
     }
   }
@@ -121,7 +114,7 @@ AlignmentCheck checkAlignment(const std::vector<Eigen::Vector3d>& source, const 
   if (degenerate_after_coarse) {
     v.icp = after_coarse;
     v.reason = "degenerate geometry after the coarse alignment (translation eigenvalue " +
-               fmt(after_coarse.min_translation_eigenvalue) + ")";
+               shortNumber(after_coarse.min_translation_eigenvalue) + ")";
     return v;
   }
   const IcpResult& r = v.icp;
@@ -130,22 +123,22 @@ AlignmentCheck checkAlignment(const std::vector<Eigen::Vector3d>& source, const 
     return v;
   }
   if (r.fitness_m > cfg.max_fitness_m) {
-    v.reason = "fitness " + fmt(r.fitness_m) + " m > " + fmt(cfg.max_fitness_m);
+    v.reason = "fitness " + shortNumber(r.fitness_m) + " m > " + shortNumber(cfg.max_fitness_m);
     return v;
   }
   if (r.overlap < cfg.min_overlap) {
-    v.reason = "overlap " + fmt(r.overlap) + " < " + fmt(cfg.min_overlap);
+    v.reason = "overlap " + shortNumber(r.overlap) + " < " + shortNumber(cfg.min_overlap);
     return v;
   }
   if (r.min_translation_eigenvalue < cfg.min_translation_eigenvalue) {
-    v.reason = "degenerate geometry (translation eigenvalue " + fmt(r.min_translation_eigenvalue) + ")";
+    v.reason = "degenerate geometry (translation eigenvalue " + shortNumber(r.min_translation_eigenvalue) + ")";
     return v;
   }
   if (by_distance) {
     const Eigen::Isometry3d correction = prior.inverse() * r.T_target_source;
     const double angle_deg = Eigen::AngleAxisd(correction.rotation()).angle() * kRadToDeg;
     if (correction.translation().norm() > cfg.max_correction_m || angle_deg > cfg.max_correction_deg) {
-      v.reason = "correction " + fmt(correction.translation().norm()) + " m / " + fmt(angle_deg) +
+      v.reason = "correction " + shortNumber(correction.translation().norm()) + " m / " + shortNumber(angle_deg) +
                  " deg from the prior exceeds the bound";
       return v;
     }
@@ -184,14 +177,14 @@ AlignmentCheck checkAlignment(const std::vector<Eigen::Vector3d>& source, const 
         if (alt.fitness_m <= cfg.ambiguity_fitness_ratio * r.fitness_m &&
             alt.overlap >= cfg.ambiguity_overlap_ratio * r.overlap && alt.fitness_m <= cfg.max_fitness_m &&
             alt.overlap >= cfg.min_overlap) {
-          v.reason = "ambiguous: an alignment " + fmt(separation) + " m away fits as well (fitness " +
-                     fmt(alt.fitness_m) + " vs " + fmt(r.fitness_m) + ", overlap " + fmt(alt.overlap) + " vs " +
-                     fmt(r.overlap) + ")";
+          v.reason = "ambiguous: an alignment " + shortNumber(separation) + " m away fits as well (fitness " +
+                     shortNumber(alt.fitness_m) + " vs " + shortNumber(r.fitness_m) + ", overlap " +
+                     shortNumber(alt.overlap) + " vs " + shortNumber(r.overlap) + ")";
           return v;
         }
       }
   v.accepted = true;
-  v.reason = "accepted: fitness " + fmt(r.fitness_m) + " m, overlap " + fmt(r.overlap);
+  v.reason = "accepted: fitness " + shortNumber(r.fitness_m) + " m, overlap " + shortNumber(r.overlap);
   return v;
 }
 
@@ -251,7 +244,8 @@ LoopResult LoopCloser::detect(const PoseGraph& graph, int query, const HeadingCh
       } else {
         ++result.candidates_refused;
         result.reason = "descriptor candidate " + std::to_string(best) + " refused: its heading (" +
-                        fmt(best_match.yaw_rad * kRadToDeg) + " deg) is not one the estimate can have drifted into";
+                        shortNumber(best_match.yaw_rad * kRadToDeg) +
+                        " deg) is not one the estimate can have drifted into";
       }
     }
   }

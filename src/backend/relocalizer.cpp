@@ -2,22 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 
+#include "mmlio/core/short_number.hpp"
 #include "mmlio/map/kd_tree.hpp"
 
 namespace mmlio::backend {
-namespace {
-
-std::string fmt(double v) {
-  std::ostringstream os;
-  os.precision(3);
-  os << v;
-  return os.str();
-}
-
-}  // namespace
-
 Relocalizer::Relocalizer(const Session& session, RelocalizerConfig cfg) : session_(session), cfg_(std::move(cfg)) {
   descriptors_.resize(session_.keyframes.size());
   for (std::size_t k = 0; k < session_.keyframes.size(); ++k)
@@ -80,7 +69,7 @@ Relocalization Relocalizer::locate(const std::vector<Eigen::Vector3d>& cloud_bod
       }
   }
   if (candidates.empty()) {
-    out.reason = hint ? "no keyframe of the session within " + fmt(cfg_.hint_radius_m) + " m of the hint"
+    out.reason = hint ? "no keyframe of the session within " + shortNumber(cfg_.hint_radius_m) + " m of the hint"
                       : "no keyframe of the session looks like this place";
     return out;
   }
@@ -117,9 +106,10 @@ Relocalization Relocalizer::locate(const std::vector<Eigen::Vector3d>& cloud_bod
         p.icp.overlap >= best->icp.overlap - cfg_.ambiguity_overlap_margin &&
         p.icp.fitness_m <= cfg_.ambiguity_fitness_ratio * best->icp.fitness_m) {
       out.reason = "ambiguous: keyframes " + std::to_string(best->keyframe) + " and " + std::to_string(p.keyframe) +
-                   " place the sweep " + fmt(separation) + " m and " + fmt(turn * 180.0 / M_PI) +
-                   " deg apart and fit alike (overlap " + fmt(best->icp.overlap) + " and " + fmt(p.icp.overlap) +
-                   ", fitness " + fmt(best->icp.fitness_m) + " and " + fmt(p.icp.fitness_m) + " m)";
+                   " place the sweep " + shortNumber(separation) + " m and " + shortNumber(turn * 180.0 / M_PI) +
+                   " deg apart and fit alike (overlap " + shortNumber(best->icp.overlap) + " and " +
+                   shortNumber(p.icp.overlap) + ", fitness " + shortNumber(best->icp.fitness_m) + " and " +
+                   shortNumber(p.icp.fitness_m) + " m)";
       return out;
     }
   }
@@ -128,9 +118,10 @@ Relocalization Relocalizer::locate(const std::vector<Eigen::Vector3d>& cloud_bod
   out.keyframe = best->keyframe;
   out.fitness_m = best->icp.fitness_m;
   out.overlap = best->icp.overlap;
-  out.reason = "verified against keyframe " + std::to_string(best->keyframe) + " (fitness " + fmt(out.fitness_m) +
-               " m, overlap " + fmt(out.overlap) + "; " + std::to_string(passed.size()) + " of " +
-               std::to_string(out.candidates_tried) + " candidates agree or fit worse)";
+  out.reason = "verified against keyframe " + std::to_string(best->keyframe) + " (fitness " +
+               shortNumber(out.fitness_m) + " m, overlap " + shortNumber(out.overlap) + "; " +
+               std::to_string(passed.size()) + " of " + std::to_string(out.candidates_tried) +
+               " candidates agree or fit worse)";
   return out;
 }
 

@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 
+#include "mmlio/core/short_number.hpp"
 #include "mmlio/core/so3.hpp"
 
 namespace mmlio::calib {
@@ -317,13 +317,6 @@ class MountSearch {
   SeenThrough seen_through_;
 };
 
-std::string fmt(double v, int precision = 3) {
-  std::ostringstream os;
-  os.precision(precision);
-  os << v;
-  return os.str();
-}
-
 }  // namespace
 
 bool cloudsAgree(double fitness_m, double overlap, double seen_through, const SpatialCalibrationConfig& cfg) {
@@ -361,8 +354,9 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
   if (static_cast<int>(solid.size()) < cfg.min_points || static_cast<int>(spinning.size()) < cfg.min_points) {
     res.refusal = Refusal::kTooFewPoints;
     res.message = "too few points to calibrate (solid-state " + std::to_string(solid.size()) + ", spinning " +
-                  std::to_string(spinning.size()) + " within " + fmt(cfg.min_range_m) + "-" + fmt(cfg.max_range_m) +
-                  " m; need " + std::to_string(cfg.min_points) + "): is either LiDAR blocked or missing at the start?";
+                  std::to_string(spinning.size()) + " within " + shortNumber(cfg.min_range_m) + "-" +
+                  shortNumber(cfg.max_range_m) + " m; need " + std::to_string(cfg.min_points) +
+                  "): is either LiDAR blocked or missing at the start?";
     return res;
   }
 
@@ -384,8 +378,9 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
       res.spinning_points = best.source_points;
       res.refusal = Refusal::kAmbiguous;
       res.message = "two mounts fit the start about equally (the one given, spinning LiDAR yaw " +
-                    fmt(yawDeg(best.gicp.T_target_source)) + " deg in the solid-state frame, and it turned to " +
-                    fmt(yawDeg(a.gicp.T_target_source)) + " deg): the start's view looks alike turned";
+                    shortNumber(yawDeg(best.gicp.T_target_source)) +
+                    " deg in the solid-state frame, and it turned to " + shortNumber(yawDeg(a.gicp.T_target_source)) +
+                    " deg): the start's view looks alike turned";
       return res;
     }
   }
@@ -403,8 +398,8 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
       res.spinning_points = finalists[0].source_points;
       res.refusal = Refusal::kAmbiguous;
       res.message = "two mounts fit the start about equally (spinning LiDAR yaw " +
-                    fmt(yawDeg(finalists[0].gicp.T_target_source)) + " and " +
-                    fmt(yawDeg(finalists[1].gicp.T_target_source)) +
+                    shortNumber(yawDeg(finalists[0].gicp.T_target_source)) + " and " +
+                    shortNumber(yawDeg(finalists[1].gicp.T_target_source)) +
                     " deg in the solid-state frame): give a rough T_imu_sensor for the spinning LiDAR "
                     "(within 30 deg), or start the bag where the view is not symmetric";
       return res;
@@ -433,17 +428,17 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
   }
   if (best.seen_through > cfg.max_seen_through) {
     res.refusal = Refusal::kSeenThrough;
-    res.message = fmt(100 * best.seen_through, 2) +
+    res.message = shortNumber(100 * best.seen_through, 2) +
                   " % of the spinning points in view lie where the solid-state "
                   "LiDAR sees through (at most " +
-                  fmt(100 * cfg.max_seen_through, 2) +
+                  shortNumber(100 * cfg.max_seen_through, 2) +
                   " %): no mount explains both views; check that both LiDARs see the same scene at the start";
     return res;
   }
   if (g.fitness_m > cfg.max_fitness_m || g.overlap < cfg.min_overlap) {
     res.refusal = Refusal::kDisagree;
-    res.message = "GICP fitness " + fmt(g.fitness_m) + " m, overlap " + fmt(g.overlap) +
-                  " (need <= " + fmt(cfg.max_fitness_m) + " m, >= " + fmt(cfg.min_overlap) +
+    res.message = "GICP fitness " + shortNumber(g.fitness_m) + " m, overlap " + shortNumber(g.overlap) +
+                  " (need <= " + shortNumber(cfg.max_fitness_m) + " m, >= " + shortNumber(cfg.min_overlap) +
                   "): the clouds do not agree; check that the rig stood still and both LiDARs see the same scene";
     return res;
   }
@@ -454,15 +449,16 @@ SpatialCalibrationResult calibrateSpinningToSolid(const std::vector<Eigen::Vecto
   if (conditioning < cfg.min_translation_conditioning) {
     res.refusal = Refusal::kDegenerate;
     res.message = "the overlapping region constrains the extrinsic poorly (translation conditioning " +
-                  fmt(conditioning) + " < " + fmt(cfg.min_translation_conditioning) +
+                  shortNumber(conditioning) + " < " + shortNumber(cfg.min_translation_conditioning) +
                   "): start the bag facing a corner or furniture, not a single wall";
     return res;
   }
   res.ok = true;
   res.covariance = search.covariance(g.T_target_source, frames);
-  res.message = "GICP fitness " + fmt(g.fitness_m) + " m, overlap " + fmt(g.overlap) + ", conditioning " +
-                fmt(conditioning) + " on " + std::to_string(best.source_points) + " spinning / " +
-                std::to_string(solid_points) + " solid-state points" + (res.yaw_searched ? " (yaw search)" : "");
+  res.message = "GICP fitness " + shortNumber(g.fitness_m) + " m, overlap " + shortNumber(g.overlap) +
+                ", conditioning " + shortNumber(conditioning) + " on " + std::to_string(best.source_points) +
+                " spinning / " + std::to_string(solid_points) + " solid-state points" +
+                (res.yaw_searched ? " (yaw search)" : "");
   return res;
 }
 

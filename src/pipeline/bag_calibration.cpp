@@ -5,11 +5,11 @@
 #include <deque>
 #include <optional>
 #include <Eigen/Eigenvalues>
-#include <sstream>
 
 #include "mmlio/config/source_options.hpp"
 #include "mmlio/core/error.hpp"
 #include "mmlio/core/log.hpp"
+#include "mmlio/core/short_number.hpp"
 #include "mmlio/eval/svg_plot.hpp"
 #include "mmlio/io/bag_source.hpp"
 #include "mmlio/lidar/voxel_filter.hpp"
@@ -19,20 +19,13 @@
 namespace mmlio::pipeline {
 namespace {
 
-std::string fmt(double v, int precision = 3) {
-  std::ostringstream os;
-  os.precision(precision);
-  os << v;
-  return os.str();
-}
-
 const auto fixed = eval::fixedText;
 
 void logCandidates(const calib::SpatialCalibrationResult& r) {
   for (const calib::MountCandidate& m : r.candidates)
-    log::emit(log::Level::kInfo, "yaw search: yaw ", fmt(m.yaw_deg, 4), " deg, ", m.inliers, " of ", m.points_in_view,
-              " spinning points in view matched (fitness ", fmt(m.fitness_m, 3), " m), ", fmt(100 * m.seen_through, 2),
-              " % seen through", m.agrees ? "" : ": disagrees");
+    log::emit(log::Level::kInfo, "yaw search: yaw ", shortNumber(m.yaw_deg, 4), " deg, ", m.inliers, " of ",
+              m.points_in_view, " spinning points in view matched (fitness ", shortNumber(m.fitness_m, 3), " m), ",
+              shortNumber(100 * m.seen_through, 2), " % seen through", m.agrees ? "" : ": disagrees");
 }
 
 struct Collected {
@@ -139,7 +132,8 @@ Eigen::Vector3d stillGyroMean(const Collected& c, const std::string& bag_path, c
       ++n;
     }
   if (n < 10)
-    throw Error("fewer than 10 IMU samples during the first " + fmt(rest_s) + " s of LiDAR data in " + bag_path);
+    throw Error("fewer than 10 IMU samples during the first " + shortNumber(rest_s) + " s of LiDAR data in " +
+                bag_path);
   gyro_mean /= n;
   acc_mean /= n;
   // Deviation of 50 ms block means from the window mean: single samples carry the sensor noise
@@ -165,8 +159,8 @@ Eigen::Vector3d stillGyroMean(const Collected& c, const std::string& bag_path, c
     acc_dev = std::max(acc_dev, (a / m - acc_mean).norm());
   }
   if (gyro_dev > opt.max_rest_gyro_rad_s || acc_dev > opt.max_rest_acc_m_s2)
-    throw Error("the rig moves during the first " + fmt(rest_s) + " s (gyro deviates by up to " + fmt(gyro_dev) +
-                " rad/s, accelerometer by " + fmt(acc_dev) +
+    throw Error("the rig moves during the first " + shortNumber(rest_s) + " s (gyro deviates by up to " +
+                shortNumber(gyro_dev) + " rad/s, accelerometer by " + shortNumber(acc_dev) +
                 " m/s^2): calibration needs it standing still at "
                 "the start; cut the bag to begin at rest (rosbag filter) or record a still second first");
 
@@ -262,7 +256,8 @@ MountCheck judgeMount(const calib::SpatialCalibrationResult& r, const Eigen::Iso
       check.checked = true;
       check.agrees = false;
       check.message = "the clouds of " + where + " contradict the mount given for '" + spinning + "' (overlap " +
-                      fmt(r.overlap, 3) + ", fitness " + fmt(r.fitness_m, 3) + " m, " + fmt(100 * r.seen_through, 2) +
+                      shortNumber(r.overlap, 3) + ", fitness " + shortNumber(r.fitness_m, 3) + " m, " +
+                      shortNumber(100 * r.seen_through, 2) +
                       " % of its points where the solid-state LiDAR sees through)";
       return check;
     case Refusal::kNone:
@@ -305,15 +300,15 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
     // A wall or a view alike turned by a quarter: the room around, seen while the rig moves on,
     // tells what the start cannot.
     log::emit(log::Level::kInfo, "the still start cannot tell the mount (", res.spatial.message,
-              "); mapping the first ", fmt(opt.motion_window_s), " s of motion with '", solid->name, "'");
+              "); mapping the first ", shortNumber(opt.motion_window_s), " s of motion with '", solid->name, "'");
     const calib::SolidView view = solidViewFromMotion(bag_path, cfg_in, *solid, c, opt);
     calib::SpatialCalibrationResult moving = calib::calibrateSpinningToSolid(spinning_pts, view, guess, opt.spatial);
     logCandidates(moving);
     if (!moving.ok)
       throw Error("spatial calibration refused: at the still start, " + res.spatial.message + "; with the first " +
-                  fmt(opt.motion_window_s) + " s of motion (" + std::to_string(view.frames.size() - 1) +
-                  " frames within " + fmt(opt.motion_radius_m) + " m), " + moving.message);
-    moving.message += " (the first " + fmt(opt.motion_window_s) +
+                  shortNumber(opt.motion_window_s) + " s of motion (" + std::to_string(view.frames.size() - 1) +
+                  " frames within " + shortNumber(opt.motion_radius_m) + " m), " + moving.message);
+    moving.message += " (the first " + shortNumber(opt.motion_window_s) +
                       " s of motion: " + std::to_string(view.frames.size() - 1) + " solid-state frames)";
     // Its map carries the solid-state odometry's drift (centimetres): the run's online
     // calibration takes the rest. (The still start, told the way round, is no help: what it
@@ -332,8 +327,8 @@ BagCalibrationResult calibrateBag(const std::string& bag_path, const config::Rig
     res.temporal = calib::calibrateTimeOffset(c.spinning_all, T_imu_spinning, c.imu, gyro_mean, opt.temporal);
     if (res.temporal.ok) {
       offset_s = res.temporal.offset_s;
-      log::emit(log::Level::kInfo, "clock offset of '", spinning->name, "': ", fmt(1e3 * offset_s, 4), " +- ",
-                fmt(1e3 * res.temporal.sigma_s, 2), " ms (", res.temporal.message, ")");
+      log::emit(log::Level::kInfo, "clock offset of '", spinning->name, "': ", shortNumber(1e3 * offset_s, 4), " +- ",
+                shortNumber(1e3 * res.temporal.sigma_s, 2), " ms (", res.temporal.message, ")");
       if (!res.temporal.advice.empty()) log::emit(log::Level::kWarn, res.temporal.advice);
     } else {
       log::emit(log::Level::kWarn, "clock offset not estimated (", res.temporal.message, "); keeping ",
@@ -409,9 +404,10 @@ MountCheck checkMountAtStart(const std::string& bag_path, const config::RigConfi
     const calib::SolidView view = solidViewFromMotion(bag_path, cfg, *solid, c, opt);
     // Its map carries the solid-state odometry's drift (centimetres, decimetres along a wall):
     // judged by the clouds' agreement and the turn, not by the move.
-    MountCheck moving = judgeMount(calib::calibrateSpinningToSolid(spinning_pts, view, given, opt.spatial), given,
-                                   spinning->name, "the first " + fmt(opt.motion_window_s) + " s of motion", opt,
-                                   /*judge_move=*/false);
+    MountCheck moving =
+        judgeMount(calib::calibrateSpinningToSolid(spinning_pts, view, given, opt.spatial), given, spinning->name,
+                   "the first " + shortNumber(opt.motion_window_s) + " s of motion", opt,
+                   /*judge_move=*/false);
     if (!moving.checked) moving.message = check.message + "; with the first seconds of motion too";
     return moving;
   } catch (const Error& e) {
