@@ -107,7 +107,7 @@ RunResult runPass(const RunOptions& options) {
   const std::string mode = modeOf(options);
   if (!config::isValidMode(mode)) throw Error("unknown mode '" + mode + "' (expected hvi, vi or hi)");
 
-  io::BagSource source(options.bag_path, config::bagSourceOptions(cfg, mode));
+  auto source = std::make_unique<io::BagSource>(options.bag_path, config::bagSourceOptions(cfg, mode));
   System system(cfg, mode);
   if (options.session && options.extend) {
     const auto [T_map_odom, at_s] = findInSession(options);
@@ -124,21 +124,25 @@ RunResult runPass(const RunOptions& options) {
 
   RunResult result;
   const bool cut = options.max_duration_s > 0;
-  const Stamp stop_ns = cut ? source.beginNs() + fromSec(options.max_duration_s) : std::numeric_limits<Stamp>::max();
+  const Stamp stop_ns = cut ? source->beginNs() + fromSec(options.max_duration_s) : std::numeric_limits<Stamp>::max();
   const Stamp imu_stop_ns = cut ? stop_ns + kImuAfterStopNs : stop_ns;
   try {
     io::SensorEvent event;
     std::size_t events = 0;
-    const Stamp period_ns = source.endNs() - source.beginNs() + fromSec(1.0);
+    const Stamp bag_begin_ns = source->beginNs();
+    const Stamp period_ns = source->endNs() - bag_begin_ns + fromSec(1.0);
     if (options.on_sweep)
-      system.setTimingObserver([&options, begin_ns = source.beginNs(), period_ns](Stamp end_ns, const StageTimes& t) {
+      system.setTimingObserver([&options, begin_ns = bag_begin_ns, period_ns](Stamp end_ns, const StageTimes& t) {
         options.on_sweep(end_ns, t, static_cast<int>(std::max<Stamp>(0, end_ns - begin_ns) / period_ns));
       });
     for (int replay = 0; replay < std::max(1, options.replays); ++replay) {
-      // Replays re-open the bag and shift its stamps past the previous pass.
-      std::unique_ptr<io::BagSource> again;
-      if (replay > 0) again = std::make_unique<io::BagSource>(options.bag_path, config::bagSourceOptions(cfg, mode));
-      io::BagSource& src = replay > 0 ? *again : source;
+      // Replays open the bag again (the pass before closed first: one reader in memory, as a run
+      // has) and shift its stamps past the previous pass.
+      if (replay > 0) {
+        source.reset();
+        source = std::make_unique<io::BagSource>(options.bag_path, config::bagSourceOptions(cfg, mode));
+      }
+      io::BagSource& src = *source;
       const Stamp shift = replay * period_ns;
       while (!(options.stop && options.stop->load()) && src.next(&event)) {
         if (event.kind == io::SensorEvent::Kind::kImu) {
@@ -154,7 +158,7 @@ RunResult runPass(const RunOptions& options) {
         }
         if (++events % 50 == 0) {
           std::ostringstream status;
-          const double bag_s = toSec(odometry.lastImuNs() - source.beginNs());
+          const double bag_s = toSec(odometry.lastImuNs() - bag_begin_ns);
           status.precision(3);
           status << system.sweepsProcessed() << " sweeps, " << odometry.keyframes() << " kf, "
                  << bag_s / std::max(1e-3, wall.elapsedMs() * 1e-3) << "x rt";
@@ -187,18 +191,18 @@ RunResult runPass(const RunOptions& options) {
   // To the bag's end (its last message, whatever was readable), not just to the last IMU sample read.
   // A run cut by --duration is judged on the span asked for.
   const Stamp stream_end_ns = options.replays > 1 ? odometry.lastImuNs()
-                              : cut               ? std::min(source.endNs(), stop_ns)
-                                                  : std::max(odometry.lastImuNs(), source.endNs());
+                              : cut               ? std::min(source->endNs(), stop_ns)
+                                                  : std::max(odometry.lastImuNs(), source->endNs());
   RunReport report = system.report(stream_end_ns, options.trust);
   RunReport::Input& input = report.input;
   input.source = options.bag_path;
-  input.duration_s = toSec(source.endNs() - source.beginNs());
-  input.imu_messages = source.imuCount();
-  input.imu_acc_scale = source.accScale();
-  input.skipped_messages = source.skippedMessages();
-  input.truncated = source.truncated();
-  input.damaged_chunks = source.damagedChunks();
-  input.decoded = source.stats();
+  input.duration_s = toSec(source->endNs() - source->beginNs());
+  input.imu_messages = source->imuCount();
+  input.imu_acc_scale = source->accScale();
+  input.skipped_messages = source->skippedMessages();
+  input.truncated = source->truncated();
+  input.damaged_chunks = source->damagedChunks();
+  input.decoded = source->stats();
   if (input.imu_dropped.total() > 0)
     log::warn("IMU: ", input.imu_dropped.total(), " samples dropped (non-finite ", input.imu_dropped.non_finite,
               ", beyond range ", input.imu_dropped.out_of_range, ", out of order ", input.imu_dropped.out_of_order,
