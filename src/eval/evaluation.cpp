@@ -117,16 +117,12 @@ EvalResult evaluate(const Trajectory& gt, const Trajectory& est, const EvalOptio
   }
   result.T_gt_est_pose =
       options.align ? alignUmeyama(gt_tips, est_tips, false).T_gt_est : Eigen::Isometry3d::Identity();
-  double rot_sq = 0.0;
+  // ... and against gravity, unaligned: how far "up" in the body differs, how far the climb.
+  double rot_sq = 0.0, tilt_sq = 0.0;
   for (size_t i = 0; i < pairs.size(); ++i) {
     const Eigen::Matrix3d R_est = result.T_gt_est_pose.linear() * pairs[i].T_world_est.linear();
     const double a = Eigen::AngleAxisd(pairs[i].T_world_gt.linear().transpose() * R_est).angle() * 180.0 / M_PI;
     rot_sq += a * a;
-  }
-  result.ate_rot_rmse_deg = std::sqrt(rot_sq / n);
-
-  double tilt_sq = 0.0;
-  for (size_t i = 0; i < pairs.size(); ++i) {
     const Eigen::Vector3d up_gt = pairs[i].T_world_gt.linear().transpose() * Eigen::Vector3d::UnitZ();
     const Eigen::Vector3d up_est = pairs[i].T_world_est.linear().transpose() * Eigen::Vector3d::UnitZ();
     const double tilt_deg = std::atan2(up_gt.cross(up_est).norm(), up_gt.dot(up_est)) * 180.0 / M_PI;
@@ -137,6 +133,7 @@ EvalResult evaluate(const Trajectory& gt, const Trajectory& est, const EvalOptio
     result.height_error_max_m =
         std::max(result.height_error_max_m, std::abs(alignment.scale * climbed_est - climbed_gt));
   }
+  result.ate_rot_rmse_deg = std::sqrt(rot_sq / n);
   result.tilt_rmse_deg = std::sqrt(tilt_sq / n);
 
   const RelativeError rpe = relativePoseError(gt_poses, est_poses, options.segment_m);

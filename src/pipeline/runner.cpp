@@ -142,9 +142,8 @@ RunResult runPass(const RunOptions& options) {
         source.reset();
         source = std::make_unique<io::BagSource>(options.bag_path, config::bagSourceOptions(cfg, mode));
       }
-      io::BagSource& src = *source;
       const Stamp shift = replay * period_ns;
-      while (!(options.stop && options.stop->load()) && src.next(&event)) {
+      while (!(options.stop && options.stop->load()) && source->next(&event)) {
         if (event.kind == io::SensorEvent::Kind::kImu) {
           event.imu.stamp_ns += shift;
           // Scans end at the requested duration; the IMU goes on a little so that the sweep the
@@ -162,7 +161,7 @@ RunResult runPass(const RunOptions& options) {
           status.precision(3);
           status << system.sweepsProcessed() << " sweeps, " << odometry.keyframes() << " kf, "
                  << bag_s / std::max(1e-3, wall.elapsedMs() * 1e-3) << "x rt";
-          progress.update((replay + src.progress()) / std::max(1, options.replays), status.str());
+          progress.update((replay + source->progress()) / std::max(1, options.replays), status.str());
         }
       }
     }
