@@ -5,9 +5,9 @@
 # and the height error against gravity (what the alignment hides) of A and B, then B / A as median
 # and worst. Every run's JSON line in OUT/ab.jsonl; only trajectories and reports are kept.
 # Usage: scripts/ab_matrix.sh BIN_A BIN_B [OUT]   (default ab_out)
-#   CELLS="office:1 office:2 office:3 hall:1 ..." (scene[+handheld]:seed; seeds >= 2 draw the mounts
-#   and the phase, even seeds the rosette pattern, as scripts/accuracy_job.sh; default: seeds 1-3
-#   of the seven scenes)   MODES="hvi vi"   JOBS=2   CONFIG_DIR=config
+#   CELLS="office:1 office:2 office:3 hall:1 ..." (scene[+handheld]:seed, simulated by the matrix's
+#   rules at IMU noise level 1, scripts/matrix_cell.sh; default: seeds 1-3 of the seven scenes)
+#   MODES="hvi vi"   JOBS=2   CONFIG_DIR=config
 #   scripts/ab_matrix.sh --summarise OUT prints the table again.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -55,15 +55,11 @@ done
 
 # One cell: simulate unless kept, then every mode with both binaries; a JSON line per run.
 cell() {
-  local out=$1 spec=$2 scene=${2%%[+:]*} seed=${2##*:} args=()
-  [[ $spec == *+handheld* ]] && args+=(--handheld)
-  [ "$seed" -ge 2 ] && args+=(--random-mount)
-  [ $((seed % 2)) -eq 0 ] && args+=(--pattern rosette)
+  # shellcheck source=scripts/matrix_cell.sh
+  source scripts/matrix_cell.sh
+  local out=$1 spec=$2 scene=${2%%[+:]*} seed=${2##*:}
   local bag="$out/bags/${spec//[:+]/_}"
-  if [ ! -f "$bag/$scene.bag" ]; then
-    "$A" -q simulate --scenario "$scene" --seed "$seed" "${args[@]}" --acc-noise 0.002 --gyro-noise 0.0002 \
-      --acc-walk 0.00006 --gyro-walk 0.000004 --acc-bias 0.01 --out "$bag" > /dev/null 2>&1
-  fi
+  [ -f "$bag/$scene.bag" ] || simulate_cell "$A" "${spec%%:*}" "$seed" 1 0 "$bag" || true
   local mode which bin rd
   for mode in ${MODES:-hvi vi}; do
     for which in A B; do

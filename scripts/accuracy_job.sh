@@ -2,8 +2,7 @@
 # One cell of the accuracy matrix: simulates SCENE with SEED at IMU noise LEVEL (1, 3, 5: multiples
 # of a Livox-Horizon-like BMI088 IMU), runs every MODE on it with the true calibration, scores
 # trajectory and map, prints one JSON line per run and deletes the bag (KEEP_BAGS=1 keeps it).
-# Seed 1: Lissajous (Horizon-like) pattern, nominal mount; even seeds: rosette pattern; seeds >= 2:
-# both extrinsics and the Velodyne sweep phase drawn from the seed.
+# The cell's pattern, mount and IMU follow its seed and level (scripts/matrix_cell.sh).
 # PEOPLE=N (default 0) puts N people walking through the scene (simulate --people N); the map is then
 # also scored for what is off the static surfaces. KEEP_MAPS=1 keeps each run's maps (accuracy.sh
 # compares the maps of a cell with people against the same cell without).
@@ -13,14 +12,12 @@
 # the row also gets the calibration's errors against the truth.
 # Usage: scripts/accuracy_job.sh OUT SCENE SEED LEVEL [MODES...]   (modes: hvi vi hi hvi+loop hvi+user ...)
 set -euo pipefail
+# shellcheck source=scripts/matrix_cell.sh
+source "$(dirname "$0")/matrix_cell.sh"
 OUT="$1" SCENE="$2" SEED="$3" LEVEL="$4"
 shift 4
 CELL_SCENE="$SCENE"
-gait=()
-if [ "${SCENE%+handheld}" != "$SCENE" ]; then
-  SCENE="${SCENE%+handheld}"
-  gait=(--handheld)
-fi
+SCENE="${SCENE%+handheld}"
 MODES=("${@:-hvi vi hi}")
 read -r -a MODES <<< "${MODES[*]}"
 MMLIO="${MMLIO:-build/mmlio}"
@@ -31,18 +28,8 @@ cell="$CELL_SCENE-s$SEED-n$LEVEL"
 dir="$OUT/$cell"
 mkdir -p "$dir"
 
-pattern=lissajous
-[ $((SEED % 2)) -eq 0 ] && pattern=rosette
-mount=()
-[ "$SEED" -ge 2 ] && mount=(--random-mount)
-# Base (LEVEL 1): BMI088 datasheet densities; LEVEL 5 reaches gyro 1e-3 rad/s/sqrt(Hz), accelerometer
-# 1e-2 m/s^2/sqrt(Hz), bias walk 3e-4 m/s^3/sqrt(Hz) and a 0.05 m/s^2 accelerometer bias per axis.
-imu=(--acc-noise "$(echo "0.002*$LEVEL" | bc -l)" --gyro-noise "$(echo "0.0002*$LEVEL" | bc -l)"
-     --acc-walk "$(echo "0.00006*$LEVEL" | bc -l)" --gyro-walk "$(echo "0.000004*$LEVEL" | bc -l)"
-     --acc-bias "$(echo "0.01*$LEVEL" | bc -l)")
-"$MMLIO" -q simulate --scenario "$SCENE" "${gait[@]}" --seed "$SEED" --pattern "$pattern" "${mount[@]}" "${imu[@]}" \
-  --people "$PEOPLE" --out "$dir" \
-  > "$dir/simulate.log" 2>&1
+pattern=$(cell_pattern "$SEED")
+simulate_cell "$MMLIO" "$CELL_SCENE" "$SEED" "$LEVEL" "$PEOPLE" "$dir"
 
 for run in "${MODES[@]}"; do
   base_run="${run%+user}"

@@ -7,20 +7,13 @@
 # Usage: scripts/calib_sensitivity.sh SCENE SEED [OUT]   (SCENE+handheld: carried by hand; MMLIO=build/mmlio)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# shellcheck source=scripts/matrix_cell.sh
+source scripts/matrix_cell.sh
 scene=$1 seed=$2 out=${3:-sensitivity_out}
 base=${scene%+handheld}
-gait=()
-[ "$base" != "$scene" ] && gait=(--handheld)
-pattern=lissajous
-[ $((seed % 2)) -eq 0 ] && pattern=rosette
-mount=()
-[ "$seed" -ge 2 ] && mount=(--random-mount)
 dir="$out/$scene-s$seed"
-mkdir -p "$dir"
 export MMLIO="${MMLIO:-build/mmlio}" dir base
-[ -f "$dir/$base.bag" ] || "$MMLIO" -q simulate --scenario "$base" "${gait[@]}" --seed "$seed" --pattern "$pattern" \
-  "${mount[@]}" --acc-noise 0.002 --gyro-noise 0.0002 --acc-walk 0.00006 --gyro-walk 0.000004 --acc-bias 0.01 \
-  --out "$dir" > "$dir/simulate.log" 2>&1
+[ -f "$dir/$base.bag" ] || simulate_cell "$MMLIO" "$scene" "$seed" 1 0 "$dir"
 one() {
   local tag=$1 dx=$2 dy=$3 dz=$4 yaw=$5 dt=$6
   python3 - "$dir/${base}_truth.yaml" "$dir/calib_$tag.yaml" "$dx" "$dy" "$dz" "$yaw" "$dt" << 'PY'
