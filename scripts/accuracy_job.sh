@@ -26,8 +26,6 @@ PEOPLE="${PEOPLE:-0}"
 cell="$CELL_SCENE-s$SEED-n$LEVEL"
 [ "$PEOPLE" -gt 0 ] && cell="$cell-p$PEOPLE"
 dir="$OUT/$cell"
-mkdir -p "$dir"
-
 pattern=$(cell_pattern "$SEED")
 simulate_cell "$MMLIO" "$CELL_SCENE" "$SEED" "$LEVEL" "$PEOPLE" "$dir"
 
